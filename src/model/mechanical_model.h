@@ -1,0 +1,53 @@
+// The interface every mechanical system implements so that the filters never
+// depend on a particular model (ENGINEERING.md). All evaluation is batched over
+// the collocation points: states and parameters are columns.
+#pragma once
+
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace pc_ekf {
+
+// A model evaluated for a fixed batch of parameter vectors (one column each).
+// Built by MechanicalModel::prepare, which does the per-parameter work once
+// (e.g. the static equilibrium), so derivatives() is cheap.
+class ModelBatch {
+ public:
+  virtual ~ModelBatch() = default;
+  virtual int pointCount() const = 0;
+  // y and dydt: stateSize() x pointCount().
+  virtual void derivatives(double t, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const = 0;
+  // Initial state of every point at t = 0 (stateSize() x pointCount()).
+  virtual Eigen::ArrayXXd initialState() const = 0;
+};
+
+class MechanicalModel {
+ public:
+  virtual ~MechanicalModel() = default;
+
+  virtual int stateSize() const = 0;
+  virtual const std::vector<std::string>& stateNames() const = 0;
+
+  // Full parameter vector (every physical constant of the model).
+  virtual const std::vector<std::string>& parameterNames() const = 0;
+  virtual const Eigen::VectorXd& nominalParameters() const = 0;
+  // "" when the parameter vector is physically admissible, else why not
+  // (e.g. "added_mass_position = 1.7 outside [0, 1.524]").
+  virtual std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const = 0;
+
+  // Measurement channels and the linear observation z = H y (channels x states).
+  virtual const std::vector<std::string>& channelNames() const = 0;
+  virtual const Eigen::MatrixXd& observationMatrix() const = 0;
+
+  // params: parameterNames().size() x Q. Columns must be admissible.
+  virtual std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const = 0;
+
+  // Kinks of the model's inputs in (t0, t1) (see RoadInput::breakpoints).
+  virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+
+  int parameterIndex(const std::string& name) const;  // -1 when unknown
+};
+
+}  // namespace pc_ekf

@@ -1,0 +1,76 @@
+// Known road excitation under the two tyres (SPEC §1.5).
+#pragma once
+
+#include <Eigen/Dense>
+#include <memory>
+#include <vector>
+
+namespace pc_ekf {
+
+class RoadInput {
+ public:
+  virtual ~RoadInput() = default;
+  // Road heights (m, up positive, 0 at rest) under tyre 1 (left) and tyre 2 (right).
+  virtual Eigen::Vector2d height(double t) const = 0;
+  // Times in the open interval (t0, t1) where the input has a kink; the
+  // integrator stops there so its order holds across them.
+  virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+};
+
+struct SpeedBumpSettings {
+  double speed_kmh = 16.0;
+  double height_left = 0.10;
+  double height_right = 0.08;
+  double ramp_up_length = 1.0;   // m of travel
+  double flat_length = 1.0;      // m
+  double ramp_down_length = 1.0; // m
+  double delay_fraction = 0.2;   // of the bump length, for tyre 2
+  double start_distance = 0.0;   // m of travel before tyre 1 reaches the bump
+};
+
+// Trapezoid bump seen by both tyres, tyre 2 delayed (SPEC §1.5).
+class SpeedBumpRoad : public RoadInput {
+ public:
+  explicit SpeedBumpRoad(const SpeedBumpSettings& s);
+  Eigen::Vector2d height(double t) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+ private:
+  SpeedBumpSettings s_;
+};
+
+struct SineSettings {
+  double amplitude = 0.05;  // m
+  double frequency = 1.0;   // Hz
+  double right_sign = -1.0; // y2 = right_sign * y1 (out of phase by default)
+};
+
+class SineRoad : public RoadInput {
+ public:
+  explicit SineRoad(const SineSettings& s);
+  Eigen::Vector2d height(double t) const override;
+  std::vector<double> breakpoints(double, double) const override { return {}; }
+ private:
+  SineSettings s_;
+};
+
+// A sampled series, linearly interpolated; held constant outside its span.
+// Samples can be appended (road from a topic); times must increase strictly.
+class SampledRoad : public RoadInput {
+ public:
+  SampledRoad() = default;
+  SampledRoad(std::vector<double> t, std::vector<double> left, std::vector<double> right);
+  // Throws std::invalid_argument when t is not strictly after the last sample or values are not finite.
+  void append(double t, double left, double right);
+  // Drops samples older than t, keeping the one at or before t (bounded buffers).
+  void discardBefore(double t);
+  bool empty() const { return t_.empty(); }
+  std::size_t size() const { return t_.size(); }
+  double firstTime() const;
+  double lastTime() const;
+  Eigen::Vector2d height(double t) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+ private:
+  std::vector<double> t_, left_, right_;
+};
+
+}  // namespace pc_ekf

@@ -1,0 +1,33 @@
+// Statistics of PC expansions from their coefficients (SPEC §2).
+// Coefficient matrices hold one quantity per row, one basis term per column;
+// column 0 is the mean (psi_1 = 1).
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+
+#include "pc/polynomial_basis.h"
+
+namespace pc_ekf {
+
+Eigen::VectorXd pcMean(const Eigen::MatrixXd& coefficients);
+// Sum over j >= 2 of a_j b_j^T.
+Eigen::MatrixXd pcCovariance(const Eigen::MatrixXd& coefficients);
+Eigen::VectorXd pcStddev(const Eigen::MatrixXd& coefficients);
+
+// Normalised histogram (unit area) of one expansion, from `draws` seeded germ samples.
+struct Histogram {
+  Eigen::VectorXd edges;      // bins + 1
+  Eigen::VectorXd densities;  // bins
+  Eigen::VectorXd centres() const;
+};
+// Bins span [lo, hi]; when lo >= hi the sample range is used. Samples outside are
+// counted in `outside_mass` and not in the bins.
+Histogram pcHistogram(const PolynomialBasis& basis, const Eigen::VectorXd& coefficients,
+                      int draws, int bins, std::uint64_t seed, double lo = 0.0, double hi = 0.0,
+                      double* outside_mass = nullptr);
+
+// Samples the germ (rows = draws) with a seeded generator.
+Eigen::MatrixXd sampleGerms(const PolynomialBasis& basis, int draws, std::uint64_t seed);
+
+}  // namespace pc_ekf

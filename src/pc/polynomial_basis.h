@@ -1,0 +1,46 @@
+// Multivariate total-degree orthonormal basis (SPEC §2).
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "pc/germ.h"
+#include "pc/orthonormal_family.h"
+
+namespace pc_ekf {
+
+// Multi-indices of total degree <= order in `dimension` variables, graded:
+// ascending total degree; within a degree, reverse lexicographic, i.e. the
+// first variable's exponent descending ((1,0) before (0,1); (2,0),(1,1),(0,2)).
+// First row is all zeros. Size = C(dimension + order, order).
+std::vector<std::vector<int>> totalDegreeMultiIndices(int dimension, int order);
+
+class PolynomialBasis {
+ public:
+  // Throws std::invalid_argument on empty germs or negative order.
+  PolynomialBasis(std::vector<GermSpec> germs, int order);
+
+  int dimension() const { return static_cast<int>(germs_.size()); }
+  int order() const { return order_; }
+  int size() const { return static_cast<int>(indices_.size()); }  // S
+  const std::vector<GermSpec>& germs() const { return germs_; }
+  const std::vector<std::vector<int>>& multiIndices() const { return indices_; }
+  const OrthonormalFamily& family(int d) const { return families_[d]; }
+
+  // psi_1..psi_S at one germ point (length dimension()).
+  Eigen::VectorXd evaluate(const Eigen::Ref<const Eigen::VectorXd>& xi) const;
+  // Rows = points (Q x dimension) -> Q x S matrix A_qj = psi_j(xi^q).
+  Eigen::MatrixXd evaluate(const Eigen::MatrixXd& points) const;
+
+  // Tensor Gauss rule of the germ measure, `n` nodes per dimension:
+  // nodes are rows of a (n^d x d) matrix; weights sum to 1.
+  void tensorGaussRule(int n, Eigen::MatrixXd* nodes, Eigen::VectorXd* weights) const;
+
+ private:
+  std::vector<GermSpec> germs_;
+  int order_;
+  std::vector<OrthonormalFamily> families_;
+  std::vector<std::vector<int>> indices_;
+};
+
+}  // namespace pc_ekf
