@@ -29,6 +29,8 @@ class CollocationDesign {
   const Eigen::MatrixXd& points() const { return points_; }           // Q x n (germ coordinates)
   const Eigen::MatrixXd& designMatrix() const { return design_; }      // A, Q x S
   const Eigen::MatrixXd& projector() const { return projector_; }      // S x Q
+  // cond(A) from its singular values; for kGauss cond(W^(1/2) A), which is 1 when the
+  // rule is exact to degree 2p (A alone grows with the tiny tail weights).
   double conditionNumber() const { return condition_; }
 
   // values: Q x m (one column per projected quantity) -> S x m coefficients.

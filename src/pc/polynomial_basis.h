@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <type_traits>
 #include <vector>
 
 #include "pc/germ.h"
@@ -31,6 +32,18 @@ class PolynomialBasis {
   Eigen::VectorXd evaluate(const Eigen::Ref<const Eigen::VectorXd>& xi) const;
   // Rows = points (Q x dimension) -> Q x S matrix A_qj = psi_j(xi^q).
   Eigen::MatrixXd evaluate(const Eigen::MatrixXd& points) const;
+  // Any other Eigen expression: a compile-time column vector is one point, anything
+  // else a matrix of points. (Without this, evaluate(VectorXd) is ambiguous between
+  // the two overloads above: both need a user-defined conversion.)
+  template <typename Derived>
+  std::conditional_t<Derived::ColsAtCompileTime == 1, Eigen::VectorXd, Eigen::MatrixXd> evaluate(
+      const Eigen::MatrixBase<Derived>& x) const {
+    if constexpr (Derived::ColsAtCompileTime == 1) {
+      return evaluate(Eigen::Ref<const Eigen::VectorXd>(x));
+    } else {
+      return evaluate(Eigen::MatrixXd(x));
+    }
+  }
 
   // Tensor Gauss rule of the germ measure, `n` nodes per dimension:
   // nodes are rows of a (n^d x d) matrix; weights sum to 1.

@@ -1,0 +1,53 @@
+# Shared by the launch-free scripts: apt dependencies and the catkin workspace.
+# Source it; it sets PC_EKF_ROOT, PC_EKF_WS and puts /usr/bin first in PATH
+# (a pyenv python3 earlier on PATH lacks catkin_pkg and breaks catkin).
+
+PC_EKF_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
+PC_EKF_WS=${PC_EKF_WS:-$PC_EKF_ROOT/.build/catkin_ws}
+export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
+export ROS_HOME=${ROS_HOME:-$PC_EKF_ROOT/.build/ros_home}
+export ROS_LOG_DIR=${ROS_LOG_DIR:-$ROS_HOME/log}
+
+PC_EKF_APT_PACKAGES=(
+  build-essential cmake libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev
+  libbenchmark-dev ros-core-dev python3-rostest python3-roslaunch python3-rosmaster
+  python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev colcon
+  python3-colcon-ros
+)
+
+pc_ekf_log() { echo "[pc_ekf] $*" >&2; }
+
+# Installs whatever of PC_EKF_APT_PACKAGES (plus "$@") is missing.
+pc_ekf_ensure_packages() {
+  local missing=() p
+  for p in "${PC_EKF_APT_PACKAGES[@]}" "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  [ ${#missing[@]} -eq 0 ] && return 0
+  pc_ekf_log "installing missing packages: ${missing[*]}"
+  local sudo=""
+  [ "$(id -u)" -ne 0 ] && sudo="sudo"
+  $sudo apt-get update -qq >&2 || return 1
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >&2 || return 1
+}
+
+# catkin workspace whose src/ links to the repository.
+pc_ekf_prepare_workspace() {
+  mkdir -p "$PC_EKF_WS/src"
+  ln -sfn "$PC_EKF_ROOT" "$PC_EKF_WS/src/pc_ekf"
+}
+
+# catkin_make in the workspace; extra arguments go to catkin_make.
+pc_ekf_catkin_make() {
+  pc_ekf_prepare_workspace
+  (cd "$PC_EKF_WS" && catkin_make -DCMAKE_BUILD_TYPE="${PC_EKF_BUILD_TYPE:-Release}" \
+     -DCATKIN_ENABLE_TESTING=ON "$@" -j"$(nproc)")
+}
+
+pc_ekf_source_workspace() {
+  # setup.bash reads unset variables; relax nounset around it.
+  set +u
+  # shellcheck disable=SC1091
+  source "$PC_EKF_WS/devel/setup.bash"
+  set -u
+}

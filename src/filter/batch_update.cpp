@@ -1,0 +1,88 @@
+#include "filter/batch_update.h"
+
+#include <stdexcept>
+
+#include "filter/trajectory_simulation.h"
+#include "pc/pc_statistics.h"
+
+namespace pc_ekf {
+
+StackedObservations forecastRecord(const PcPropagator& propagator,
+                                   const Eigen::MatrixXd& theta_coeffs,
+                                   const MeasurementSeries& series, ForecastReport* report) {
+  const int q = propagator.design().pointCount();
+  report->points = q;
+  std::vector<std::string> reasons;
+  const Eigen::MatrixXd params = propagator.parametersAtPoints(theta_coeffs, &reasons);
+  std::vector<bool> usable(q, true);
+  std::vector<Eigen::Index> cols;
+  for (int i = 0; i < q; ++i) {
+    if (reasons[i].empty()) {
+      cols.push_back(i);
+    } else {
+      usable[i] = false;
+      ++report->invalid_points;
+      if (report->first_problem.empty()) report->first_problem = reasons[i];
+    }
+  }
+  Eigen::MatrixXd valid(params.rows(), cols.size());
+  for (std::size_t i = 0; i < cols.size(); ++i) valid.col(i) = params.col(cols[i]);
+  const auto channels =
+      simulateChannels(propagator.model(), valid, sampleTimes(series), propagator.integration());
+
+  Eigen::Index rows = 0;
+  for (const auto& m : series) rows += static_cast<Eigen::Index>(m.channels.size());
+  Eigen::MatrixXd values = Eigen::MatrixXd::Zero(rows, q);
+  StackedObservations out;
+  out.z.resize(rows);
+  Eigen::Index row = 0;
+  for (std::size_t k = 0; k < series.size(); ++k) {
+    const Measurement& m = series[k];
+    for (std::size_t c = 0; c < m.channels.size(); ++c, ++row) {
+      out.z[row] = m.values[c];
+      for (std::size_t i = 0; i < cols.size(); ++i) values(row, cols[i]) = channels[k](m.channels[c], i);
+    }
+  }
+  for (std::size_t i = 0; i < cols.size(); ++i) {
+    if (!values.col(cols[i]).allFinite()) {
+      usable[cols[i]] = false;
+      ++report->nonfinite_points;
+      values.col(cols[i]).setZero();
+    }
+  }
+  out.z_coeffs = propagator.project(values, usable, report);
+  return out;
+}
+
+BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
+                        const NoiseModel& noise, UpdateRule rule,
+                        const std::vector<double>& alphas) {
+  if (alphas.empty()) throw std::invalid_argument("batchUpdate: no iterations");
+  BatchResult result;
+  Eigen::MatrixXd theta = propagator.priorState().bottomRows(propagator.parameterCount());
+  for (std::size_t i = 0; i < alphas.size(); ++i) {
+    ForecastReport report;
+    const StackedObservations obs = forecastRecord(propagator, theta, series, &report);
+    result.forecast.merge(report);
+    result.observations = static_cast<int>(obs.z.size());
+    if (!report.ok) {
+      result.finite = false;
+      break;
+    }
+    const Eigen::VectorXd r = alphas[i] * noise.variances(obs.z);
+    const UpdateDiagnostics d = pcKalmanUpdate(theta, obs.z_coeffs, obs.z, r, rule);
+    if (i == 0) result.nis = d.nis;
+    result.iterations = static_cast<int>(i + 1);
+    if (!d.finite) {
+      result.finite = false;
+      break;
+    }
+  }
+  result.coefficients = theta;
+  result.mean = pcMean(theta);
+  result.stddev = pcStddev(theta);
+  result.finite = result.finite && theta.allFinite();
+  return result;
+}
+
+}  // namespace pc_ekf

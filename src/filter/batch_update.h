@@ -1,0 +1,43 @@
+// Whole-set-of-data-at-once update (SPEC §3.4, paper eq. 33-37) and its
+// iterated form ES-MDA (Emerick & Reynolds 2013): forecast every collocation
+// point over the whole record from t = 0 with the current parameter
+// expansion, stack all observations, update the parameter coefficients.
+// Cost is linear in the number of observations (see kalman_update.h).
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "filter/kalman_update.h"
+#include "filter/measurement.h"
+#include "filter/pc_propagator.h"
+
+namespace pc_ekf {
+
+struct BatchResult {
+  Eigen::MatrixXd coefficients;  // parameters x S after the last iteration
+  Eigen::VectorXd mean, stddev;
+  int iterations = 0;
+  int observations = 0;        // stacked scalar observations
+  double nis = 0.0;            // of the first iteration (prior predictive)
+  bool finite = true;
+  ForecastReport forecast;     // merged over iterations
+};
+
+// Stacked observation coefficients (observations x S) of the parameter
+// expansion theta_coeffs over the record, and the stacked data.
+struct StackedObservations {
+  Eigen::MatrixXd z_coeffs;
+  Eigen::VectorXd z;
+};
+StackedObservations forecastRecord(const PcPropagator& propagator,
+                                   const Eigen::MatrixXd& theta_coeffs,
+                                   const MeasurementSeries& series, ForecastReport* report);
+
+// alphas = {1} is the paper's single whole-set update; ES-MDA uses
+// sum(1/alpha_i) = 1 (default four times 4). R_i = alpha_i R.
+BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
+                        const NoiseModel& noise, UpdateRule rule,
+                        const std::vector<double>& alphas);
+
+}  // namespace pc_ekf

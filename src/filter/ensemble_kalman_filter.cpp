@@ -1,0 +1,116 @@
+#include "filter/ensemble_kalman_filter.h"
+
+#include <stdexcept>
+#include <thread>
+
+#include "filter/one_step_filter.h"
+#include "pc/polynomial_basis.h"
+#include "pc/pc_statistics.h"
+
+namespace pc_ekf {
+
+EnsembleKalmanFilter::EnsembleKalmanFilter(std::shared_ptr<const MechanicalModel> model,
+                                           ParameterMapping mapping, const EnkfSettings& settings)
+    : model_(std::move(model)), mapping_(std::move(mapping)), settings_(settings), rng_(settings.seed) {
+  if (settings.members < 2) throw std::invalid_argument("EnKF needs at least 2 members");
+  const PolynomialBasis basis(mapping_.germs(), 0);
+  theta_ = mapping_.valuesAtGerms(sampleGerms(basis, settings.members, settings.seed));
+  const Eigen::MatrixXd full = mapping_.fullParameters(theta_);
+  admissible_.assign(settings.members, true);
+  for (int e = 0; e < settings.members; ++e) admissible_[e] = model_->invalidReason(full.col(e)).empty();
+  Eigen::MatrixXd valid = full;
+  for (int e = 0; e < settings.members; ++e) {
+    if (!admissible_[e]) valid.col(e) = model_->nominalParameters();
+  }
+  states_ = model_->prepare(valid)->initialState();
+}
+
+void EnsembleKalmanFilter::forecast(double t1, int* inadmissible) {
+  if (t1 == t_) return;
+  const Eigen::MatrixXd full = mapping_.fullParameters(theta_);
+  std::vector<Eigen::Index> cols;
+  for (Eigen::Index e = 0; e < full.cols(); ++e) {
+    admissible_[e] = model_->invalidReason(full.col(e)).empty() && states_.col(e).allFinite();
+    if (admissible_[e]) cols.push_back(e);
+  }
+  *inadmissible = static_cast<int>(full.cols() - cols.size());
+  const Eigen::Index n = static_cast<Eigen::Index>(cols.size());
+  const int threads = n >= 64 ? std::max(1, settings_.threads) : 1;
+  std::vector<std::thread> workers;
+  std::vector<Eigen::ArrayXXd> parts(threads);
+  for (int w = 0; w < threads; ++w) {
+    const Eigen::Index b = n * w / threads, e = n * (w + 1) / threads;
+    Eigen::MatrixXd p(full.rows(), e - b);
+    parts[w].resize(states_.rows(), e - b);
+    for (Eigen::Index i = b; i < e; ++i) {
+      p.col(i - b) = full.col(cols[i]);
+      parts[w].col(i - b) = states_.col(cols[i]);
+    }
+    auto job = [this, p, t1, &parts, w] {
+      if (p.cols() == 0) return;
+      const auto batch = model_->prepare(p);
+      integrate(*model_, *batch, t_, t1, parts[w], settings_.integration);
+    };
+    if (threads == 1) job(); else workers.emplace_back(job);
+  }
+  for (auto& w : workers) w.join();
+  for (int w = 0; w < threads; ++w) {
+    const Eigen::Index b = n * w / threads;
+    for (Eigen::Index i = 0; i < parts[w].cols(); ++i) states_.col(cols[b + i]) = parts[w].col(i);
+  }
+  integrations_ += n;
+}
+
+EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
+  const std::string problem = measurementProblem(m, static_cast<int>(model_->channelNames().size()));
+  if (!problem.empty()) throw std::invalid_argument("measurement rejected: " + problem);
+  if (m.time < t_) throw std::invalid_argument("measurement rejected: time before the filter's");
+  EnkfStep s;
+  forecast(m.time, &s.inadmissible_members);
+  t_ = m.time;
+  s.index = ++samples_;
+  s.time = m.time;
+
+  std::vector<Eigen::Index> cols;
+  for (Eigen::Index e = 0; e < theta_.cols(); ++e) {
+    if (admissible_[e] && states_.col(e).allFinite()) cols.push_back(e);
+  }
+  const Eigen::Index ne = static_cast<Eigen::Index>(cols.size()), k = m.values.size();
+  const int ns = model_->stateSize(), np = mapping_.count();
+  if (ne >= 2 && k > 0) {
+    Eigen::MatrixXd x(ns + np, ne), h(k, ns);
+    for (Eigen::Index i = 0; i < ne; ++i) {
+      x.col(i) << states_.col(cols[i]).matrix(), theta_.col(cols[i]);
+    }
+    for (Eigen::Index c = 0; c < k; ++c) h.row(c) = model_->observationMatrix().row(m.channels[c]);
+    const Eigen::MatrixXd hx = h * x.topRows(ns);
+    const Eigen::VectorXd xm = x.rowwise().mean(), zm = hx.rowwise().mean();
+    const Eigen::MatrixXd a = x.colwise() - xm, y = hx.colwise() - zm;
+    const Eigen::VectorXd r = settings_.noise.variances(m.values);
+    const Eigen::MatrixXd pzz = y * y.transpose() / double(ne - 1) + Eigen::MatrixXd(r.asDiagonal());
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(pzz);
+    const Eigen::MatrixXd gain = ldlt.solve(y * a.transpose() / double(ne - 1)).transpose();
+    s.innovation = m.values - zm;
+    s.nis = s.innovation.dot(ldlt.solve(s.innovation));
+    std::normal_distribution<double> normal;
+    const Eigen::VectorXd sd = r.cwiseSqrt();
+    for (Eigen::Index i = 0; i < ne; ++i) {
+      Eigen::VectorXd perturbed = m.values;
+      for (Eigen::Index c = 0; c < k; ++c) perturbed[c] += sd[c] * normal(rng_);
+      x.col(i) += gain * (perturbed - hx.col(i));
+      states_.col(cols[i]) = x.col(i).head(ns).array();
+      theta_.col(cols[i]) = x.col(i).tail(np);
+    }
+  }
+  Eigen::MatrixXd valid(np, ne);
+  for (Eigen::Index i = 0; i < ne; ++i) valid.col(i) = theta_.col(cols[i]);
+  s.mean = valid.rowwise().mean();
+  s.stddev = Eigen::VectorXd::Zero(np);
+  if (ne >= 2) {
+    s.stddev = ((valid.colwise() - s.mean).rowwise().squaredNorm() / double(ne - 1)).cwiseSqrt();
+  }
+  s.finite = s.mean.allFinite() && s.stddev.allFinite();
+  return s;
+}
+
+}  // namespace pc_ekf

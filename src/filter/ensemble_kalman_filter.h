@@ -1,0 +1,60 @@
+// Monte-Carlo ensemble Kalman filter with perturbed observations (SPEC §3.5):
+// the cost/accuracy baseline for the PC-EKF, on the same model and data.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <memory>
+#include <random>
+
+#include "filter/measurement.h"
+#include "filter/uncertain_parameters.h"
+#include "model/integrator.h"
+#include "model/mechanical_model.h"
+
+namespace pc_ekf {
+
+struct EnkfSettings {
+  int members = 200;
+  std::uint64_t seed = 7;
+  NoiseModel noise;
+  IntegratorSettings integration;
+  int threads = 2;
+};
+
+struct EnkfStep {
+  int index = 0;
+  double time = 0.0;
+  Eigen::VectorXd mean, stddev;  // parameters
+  Eigen::VectorXd innovation;
+  double nis = 0.0;
+  int inadmissible_members = 0;  // frozen: parameters outside the model's domain
+  bool finite = true;
+};
+
+class EnsembleKalmanFilter {
+ public:
+  EnsembleKalmanFilter(std::shared_ptr<const MechanicalModel> model, ParameterMapping mapping,
+                       const EnkfSettings& settings);
+  // Throws std::invalid_argument for a bad measurement or a time before the filter's.
+  EnkfStep process(const Measurement& m);
+
+  const Eigen::MatrixXd& parameters() const { return theta_; }  // parameters x members
+  long integrations() const { return integrations_; }          // member-intervals
+
+ private:
+  void forecast(double t1, int* inadmissible);
+
+  std::shared_ptr<const MechanicalModel> model_;
+  ParameterMapping mapping_;
+  EnkfSettings settings_;
+  std::mt19937_64 rng_;
+  Eigen::MatrixXd theta_;   // parameters x members
+  Eigen::ArrayXXd states_;  // states x members
+  std::vector<bool> admissible_;
+  double t_ = 0.0;
+  int samples_ = 0;
+  long integrations_ = 0;
+};
+
+}  // namespace pc_ekf

@@ -1,0 +1,108 @@
+#include "filter/health.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "pc/orthonormal_family.h"
+#include "pc/pc_statistics.h"
+
+namespace pc_ekf {
+
+double chiSquareQuantile(double probability, double dof) {
+  // chi2(k) = 2 Gamma(k/2, 1).
+  const OrthonormalFamily gamma(GermSpec{GermFamily::kGamma, dof / 2.0, 1.0});
+  return 2.0 * gamma.inverseCdf(probability);
+}
+
+std::vector<std::string> HealthStatus::warnings() const {
+  std::vector<std::string> w;
+  std::ostringstream o;
+  if (non_finite) w.push_back("non-finite filter state");
+  if (forecast_failed) w.push_back("forecast failed: too few usable collocation points");
+  if (nis_window_outside) {
+    o << "windowed NIS mean " << nis_window_mean << " outside [" << window_lower << ", "
+      << window_upper << "]";
+    w.push_back(o.str());
+  }
+  if (support_exceeded) w.push_back("parameter PDF mass outside the prior support");
+  return w;
+}
+
+HealthMonitor::HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings)
+    : settings_(settings) {
+  const int n = propagator.parameterCount();
+  psi_ = propagator.basis().evaluate(
+      sampleGerms(propagator.basis(), settings.support_draws, settings.seed));
+  lower_.resize(n);
+  upper_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    lower_[i] = propagator.mapping().lowerBound(i);
+    upper_[i] = propagator.mapping().upperBound(i);
+  }
+}
+
+void HealthMonitor::reset() {
+  window_.clear();
+  last_mean_.resize(0);
+  last_std_.resize(0);
+}
+
+HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
+                                   const Eigen::MatrixXd& coeffs) {
+  HealthStatus h;
+  h.forecast_failed = !forecast.ok;
+  h.non_finite = !update.finite || !coeffs.allFinite();
+  const double tail = (1.0 - settings_.nis_confidence) / 2.0;
+  if (update.channels > 0 && !h.non_finite) {
+    h.nis = update.nis;
+    h.nis_lower = chiSquareQuantile(tail, update.channels);
+    h.nis_upper = chiSquareQuantile(1.0 - tail, update.channels);
+    h.nis_outside = h.nis < h.nis_lower || h.nis > h.nis_upper;
+    window_.emplace_back(update.nis, update.channels);
+    while (static_cast<int>(window_.size()) > settings_.nis_window) window_.pop_front();
+  }
+  if (!window_.empty()) {
+    double sum = 0.0;
+    int dof = 0;
+    for (const auto& [nis, k] : window_) {
+      sum += nis;
+      dof += k;
+    }
+    const double count = static_cast<double>(window_.size());
+    h.nis_window_mean = sum / count;
+    h.window_lower = chiSquareQuantile(tail, dof) / count;
+    h.window_upper = chiSquareQuantile(1.0 - tail, dof) / count;
+    // Judge only a full window: a few samples say little about calibration.
+    h.nis_window_outside = static_cast<int>(window_.size()) == settings_.nis_window &&
+                           (h.nis_window_mean < h.window_lower || h.nis_window_mean > h.window_upper);
+  }
+  h.mass_outside_support = Eigen::VectorXd::Zero(coeffs.rows());
+  if (!h.non_finite) {
+    const Eigen::MatrixXd values = psi_ * coeffs.transpose();  // draws x parameters
+    for (Eigen::Index i = 0; i < coeffs.rows(); ++i) {
+      const auto v = values.col(i).array();
+      h.mass_outside_support[i] =
+          ((v < lower_[i]) || (v > upper_[i])).cast<double>().mean();
+    }
+    h.support_exceeded = (h.mass_outside_support.array() > settings_.support_mass_limit).any();
+    const Eigen::VectorXd mean = pcMean(coeffs), sd = pcStddev(coeffs);
+    if (last_mean_.size() == mean.size()) {
+      h.band_nested = ((mean - sd).array() >= (last_mean_ - last_std_).array() - 1e-15).all() &&
+                      ((mean + sd).array() <= (last_mean_ + last_std_).array() + 1e-15).all();
+    }
+    last_mean_ = mean;
+    last_std_ = sd;
+  }
+  return h;
+}
+
+Eigen::VectorXd coherenceDisagreement(const Eigen::VectorXd& mean_full,
+                                      const Eigen::VectorXd& std_full,
+                                      const Eigen::VectorXd& mean_decimated,
+                                      const Eigen::VectorXd& std_decimated) {
+  return ((mean_full - mean_decimated).array().abs() /
+          (std_full.array().square() + std_decimated.array().square()).sqrt())
+      .matrix();
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,66 @@
+// Per-update health checks (SPEC §3.6): NIS against two-sided chi-square
+// bounds and its windowed average, PDF mass outside the prior support,
+// non-finite values, and the paper's nested-band criterion (informational
+// only: the exact posterior violates it at most steps).
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <deque>
+#include <string>
+#include <vector>
+
+#include "filter/kalman_update.h"
+#include "filter/pc_propagator.h"
+
+namespace pc_ekf {
+
+struct HealthSettings {
+  int nis_window = 10;
+  double nis_confidence = 0.99;  // two-sided
+  int support_draws = 2000;      // germ samples for the outside-support mass
+  double support_mass_limit = 0.05;
+  std::uint64_t seed = 11;
+};
+
+struct HealthStatus {
+  double nis = 0.0;
+  double nis_lower = 0.0, nis_upper = 0.0;
+  bool nis_outside = false;  // this sample (expected in 1 - confidence of samples)
+  double nis_window_mean = 0.0;
+  double window_lower = 0.0, window_upper = 0.0;
+  bool nis_window_outside = false;  // drives health
+  Eigen::VectorXd mass_outside_support;  // per parameter
+  bool support_exceeded = false;         // any mass above support_mass_limit (warning)
+  bool non_finite = false;               // drives health
+  bool forecast_failed = false;          // drives health
+  bool band_nested = true;               // informational only
+  bool healthy() const { return !non_finite && !forecast_failed && !nis_window_outside; }
+  std::vector<std::string> warnings() const;
+};
+
+// Quantile of the chi-square distribution with `dof` degrees of freedom.
+double chiSquareQuantile(double probability, double dof);
+
+class HealthMonitor {
+ public:
+  HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings);
+  HealthStatus assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
+                      const Eigen::MatrixXd& parameter_coeffs);
+  void reset();
+
+ private:
+  HealthSettings settings_;
+  Eigen::MatrixXd psi_;  // support_draws x S basis values at fixed germ samples
+  Eigen::VectorXd lower_, upper_;
+  std::deque<std::pair<double, int>> window_;  // (nis, channels)
+  Eigen::VectorXd last_mean_, last_std_;
+};
+
+// Multi-rate coherence (SPEC §3.6): |m_full - m_dec| / sqrt(s_full^2 + s_dec^2).
+Eigen::VectorXd coherenceDisagreement(const Eigen::VectorXd& mean_full,
+                                      const Eigen::VectorXd& std_full,
+                                      const Eigen::VectorXd& mean_decimated,
+                                      const Eigen::VectorXd& std_decimated);
+
+}  // namespace pc_ekf

@@ -1,0 +1,71 @@
+// Forecast of the extended PC state X = [y; theta] by stochastic collocation
+// (SPEC §3.1): evaluate X at the collocation points, integrate each point's
+// model, project back onto the basis.
+#pragma once
+
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "filter/uncertain_parameters.h"
+#include "model/integrator.h"
+#include "model/mechanical_model.h"
+#include "pc/collocation_design.h"
+#include "pc/polynomial_basis.h"
+
+namespace pc_ekf {
+
+// Points whose parameters leave the physical domain or whose integration is
+// not finite are dropped from the projection (least squares on the rest) and
+// counted here; `ok` is false when too few remain to determine S coefficients.
+struct ForecastReport {
+  int points = 0;
+  int invalid_points = 0;    // parameters outside the model's domain
+  int nonfinite_points = 0;  // integration produced NaN/Inf
+  bool ok = true;
+  std::string first_problem;
+  void merge(const ForecastReport& other);
+};
+
+class PcPropagator {
+ public:
+  PcPropagator(std::shared_ptr<const MechanicalModel> model, const PolynomialBasis& basis,
+               const CollocationDesign& design, ParameterMapping mapping,
+               IntegratorSettings settings);
+
+  const MechanicalModel& model() const { return *model_; }
+  const PolynomialBasis& basis() const { return basis_; }
+  const CollocationDesign& design() const { return design_; }
+  const ParameterMapping& mapping() const { return mapping_; }
+  const IntegratorSettings& integration() const { return settings_; }
+  int stateCount() const { return model_->stateSize(); }
+  int parameterCount() const { return mapping_.count(); }
+  int termCount() const { return basis_.size(); }
+
+  // Prior X: theta from the config's germs, y the projected initial state.
+  Eigen::MatrixXd priorState() const;
+  // Advances X from t0 to t1 (t1 >= t0; equal times leave X unchanged).
+  ForecastReport forecast(Eigen::MatrixXd& x, double t0, double t1) const;
+
+  // Full model parameters at the collocation points for parameter coefficients
+  // (count x S), with per-point admissibility (reason "" when valid).
+  Eigen::MatrixXd parametersAtPoints(const Eigen::MatrixXd& theta_coeffs,
+                                     std::vector<std::string>* invalid_reasons) const;
+  // Projects values at the points (rows x Q) onto the basis (rows x S) using
+  // only the points marked usable; reports when they cannot determine S terms.
+  Eigen::MatrixXd project(const Eigen::MatrixXd& values, const std::vector<bool>& usable,
+                          ForecastReport* report) const;
+
+  long integrations() const { return integrations_; }
+
+ private:
+  std::shared_ptr<const MechanicalModel> model_;
+  PolynomialBasis basis_;
+  CollocationDesign design_;
+  ParameterMapping mapping_;
+  IntegratorSettings settings_;
+  mutable long integrations_ = 0;  // point-intervals integrated (cost accounting)
+};
+
+}  // namespace pc_ekf

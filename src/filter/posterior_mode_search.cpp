@@ -1,0 +1,160 @@
+#include "filter/posterior_mode_search.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace pc_ekf {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Residual and forward-difference Jacobian at one point.
+struct Linearisation {
+  Eigen::VectorXd x;
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jacobian;
+  double f = kInf;  // 1/2 |r|^2 - log prior
+};
+
+struct Search {
+  Linearisation at;
+  double lambda = 1e-3;
+  bool active = true;
+  bool converged = false;
+  int iterations = 0;
+};
+
+// Steps point into the support so that no stencil point leaves it.
+Eigen::VectorXd differenceSteps(const PriorDensity& prior, const Eigen::VectorXd& x,
+                                double relative) {
+  Eigen::VectorXd h(x.size());
+  for (int i = 0; i < x.size(); ++i) {
+    h[i] = relative * prior.gridRange(i).width();
+    if (x[i] + h[i] > prior.support(i).upper) h[i] = -h[i];
+  }
+  return h;
+}
+
+// Evaluates the points and their stencils in one residual batch.
+std::vector<Linearisation> linearise(const PosteriorResidual& residual, const PriorDensity& prior,
+                                     const std::vector<Eigen::VectorXd>& points, double relative) {
+  const int n = prior.dimension();
+  const Eigen::Index stride = n + 1;
+  Eigen::MatrixXd xi(n, stride * static_cast<Eigen::Index>(points.size()));
+  std::vector<Eigen::VectorXd> steps;
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    steps.push_back(differenceSteps(prior, points[p], relative));
+    for (int i = 0; i <= n; ++i) {
+      xi.col(p * stride + i) = points[p];
+      if (i > 0) xi(i - 1, p * stride + i) += steps[p][i - 1];
+    }
+  }
+  const Eigen::MatrixXd r = points.empty() ? Eigen::MatrixXd() : residual.residuals(xi);
+  std::vector<Linearisation> out(points.size());
+  for (std::size_t p = 0; p < points.size(); ++p) {
+    Linearisation& l = out[p];
+    l.x = points[p];
+    l.r = r.col(p * stride);
+    l.jacobian = Eigen::MatrixXd::Zero(r.rows(), n);
+    const double log_prior = prior.logDensity(l.x);
+    if (!l.r.allFinite() || !std::isfinite(log_prior)) continue;  // f stays +inf
+    l.f = 0.5 * l.r.squaredNorm() - log_prior;
+    for (int i = 0; i < n; ++i) {
+      const auto shifted = r.col(p * stride + 1 + i);
+      // A non-finite neighbour (inadmissible parameters) leaves that column 0:
+      // the prior and the damping still give a usable step.
+      if (shifted.allFinite()) l.jacobian.col(i) = (shifted - l.r) / steps[p][i];
+    }
+  }
+  return out;
+}
+
+Eigen::MatrixXd gaussNewtonHessian(const PriorDensity& prior, const Linearisation& l,
+                                   Eigen::VectorXd* gradient) {
+  Eigen::VectorXd prior_gradient, curvature;
+  prior.derivatives(l.x, prior_gradient, curvature);
+  Eigen::MatrixXd h = l.jacobian.transpose() * l.jacobian;
+  h.diagonal() += curvature;
+  if (gradient != nullptr) *gradient = l.jacobian.transpose() * l.r - prior_gradient;
+  return h;
+}
+
+}  // namespace
+
+std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual,
+                                               const PriorDensity& prior,
+                                               const std::vector<Eigen::VectorXd>& starts,
+                                               const ModeSearchSettings& settings) {
+  if (residual.dimension() != prior.dimension()) {
+    throw std::invalid_argument("refineModes: residual and prior dimensions differ");
+  }
+  std::vector<Search> searches(starts.size());
+  {
+    const auto initial = linearise(residual, prior, starts, settings.difference_step);
+    for (std::size_t s = 0; s < starts.size(); ++s) {
+      searches[s].at = initial[s];
+      if (!std::isfinite(initial[s].f)) {
+        throw std::invalid_argument("refineModes: a start has zero posterior density");
+      }
+    }
+  }
+  for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
+    std::vector<std::size_t> trying;
+    std::vector<Eigen::VectorXd> trials;
+    for (std::size_t s = 0; s < searches.size(); ++s) {
+      Search& search = searches[s];
+      if (!search.active) continue;
+      Eigen::VectorXd g;
+      const Eigen::MatrixXd h = gaussNewtonHessian(prior, search.at, &g);
+      // Marquardt's scaling: damping proportional to the diagonal.
+      Eigen::MatrixXd damped = h;
+      const double floor = 1e-30 + 1e-15 * h.diagonal().maxCoeff();
+      damped.diagonal() += search.lambda * h.diagonal().cwiseMax(floor);
+      const Eigen::VectorXd step = damped.ldlt().solve(-g);
+      if (!step.allFinite()) {
+        search.active = false;
+        continue;
+      }
+      trying.push_back(s);
+      trials.push_back(prior.clamp(search.at.x + step));
+    }
+    if (trying.empty()) break;
+    const auto trial = linearise(residual, prior, trials, settings.difference_step);
+    for (std::size_t t = 0; t < trying.size(); ++t) {
+      Search& search = searches[trying[t]];
+      ++search.iterations;
+      const double f_old = search.at.f;
+      if (trial[t].f < f_old) {
+        search.at = trial[t];
+        search.lambda = std::max(search.lambda / 3.0, 1e-12);
+        if (f_old - trial[t].f <= settings.relative_decrease * (1.0 + std::abs(trial[t].f))) {
+          search.converged = true;
+          search.active = false;
+        }
+      } else {
+        search.lambda *= 8.0;
+        // No decrease even for a tiny damped step: at the minimum to round-off.
+        if (search.lambda > 1e12) {
+          search.converged = true;
+          search.active = false;
+        }
+      }
+    }
+  }
+  std::vector<PosteriorModeEstimate> out;
+  for (const Search& search : searches) {
+    PosteriorModeEstimate m;
+    m.xi = search.at.x;
+    m.log_density = -search.at.f;
+    m.hessian = gaussNewtonHessian(prior, search.at, nullptr);
+    m.iterations = search.iterations;
+    m.converged = search.converged;
+    out.push_back(m);
+  }
+  return out;
+}
+
+}  // namespace pc_ekf

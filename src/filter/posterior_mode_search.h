@@ -1,0 +1,41 @@
+// Step 2 of the reference posterior (SPEC §3.5): Levenberg-Marquardt on the
+// negative log posterior F = 1/2 |r|^2 - log prior, started from the coarse
+// grid's local maxima. All starts iterate together so that every residual
+// evaluation (trial points and finite-difference stencils) is one batch.
+#pragma once
+
+#include <Eigen/Dense>
+#include <vector>
+
+#include "filter/posterior_prior.h"
+#include "filter/posterior_residual.h"
+
+namespace pc_ekf {
+
+struct ModeSearchSettings {
+  int max_iterations = 100;
+  // Forward-difference step, relative to each germ's grid range width. The
+  // posterior std is >= ~1e-5 of the range and the residuals are smooth in xi
+  // (fixed integration steps), so 1e-7 keeps both truncation and round-off small.
+  double difference_step = 1e-7;
+  // Converged when an accepted step lowers F by less than this * (1 + |F|).
+  double relative_decrease = 1e-12;
+};
+
+struct PosteriorModeEstimate {
+  Eigen::VectorXd xi;
+  double log_density = 0.0;  // log prior + log likelihood (unnormalised) at xi
+  // Gauss-Newton Hessian of F at xi: J^T J + the prior's curvature.
+  Eigen::MatrixXd hessian;
+  int iterations = 0;
+  bool converged = false;
+};
+
+// One estimate per start (same order); starts must have finite log posterior.
+// Steps are projected onto the prior's support.
+std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual,
+                                               const PriorDensity& prior,
+                                               const std::vector<Eigen::VectorXd>& starts,
+                                               const ModeSearchSettings& settings);
+
+}  // namespace pc_ekf

@@ -1,0 +1,52 @@
+// The uncertain parameters theta of the extended state [y; theta] and their
+// map into the model's full parameter vector (SPEC §1.1, §3).
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "model/mechanical_model.h"
+#include "pc/germ.h"
+#include "pc/polynomial_basis.h"
+
+namespace pc_ekf {
+
+// value = nominal * (1 + relative_range * xi), xi the germ (SPEC §1.1).
+struct UncertainParameter {
+  std::string name;  // one of the model's parameter names
+  double nominal = 0.0;
+  double relative_range = 0.0;
+  GermSpec germ;
+};
+
+class ParameterMapping {
+ public:
+  // Throws std::invalid_argument when a name is not a model parameter.
+  ParameterMapping(const MechanicalModel& model, std::vector<UncertainParameter> uncertain);
+
+  int count() const { return static_cast<int>(uncertain_.size()); }
+  const std::vector<UncertainParameter>& uncertain() const { return uncertain_; }
+  std::vector<GermSpec> germs() const;
+  std::vector<std::string> names() const;
+
+  // theta (count x Q) -> full model parameters (model parameters x Q), the
+  // others at their nominal values.
+  Eigen::MatrixXd fullParameters(const Eigen::MatrixXd& theta) const;
+  // Parameter values at germ points (rows of xi, Q x count) -> count x Q.
+  Eigen::MatrixXd valuesAtGerms(const Eigen::MatrixXd& xi) const;
+  // Germ coordinates of parameter values (inverse of the affine map).
+  Eigen::VectorXd germOf(const Eigen::VectorXd& values) const;
+  // Prior coefficients (count x S): exact, the map is affine in each germ.
+  Eigen::MatrixXd priorCoefficients(const PolynomialBasis& basis) const;
+  // Support of each parameter under its prior germ (may be infinite).
+  double lowerBound(int i) const;
+  double upperBound(int i) const;
+
+ private:
+  Eigen::VectorXd nominal_full_;
+  std::vector<int> index_;
+  std::vector<UncertainParameter> uncertain_;
+};
+
+}  // namespace pc_ekf

@@ -1,0 +1,98 @@
+#include "io/estimation_setup.h"
+
+#include "io/measurement_csv.h"
+
+namespace pc_ekf {
+
+std::shared_ptr<const RoadInput> makeRoad(const EstimatorConfig& c,
+                                          std::shared_ptr<const RoadInput> sampled) {
+  if (sampled) return sampled;
+  switch (c.road.source) {
+    case RoadSource::kSpeedBump: return std::make_shared<SpeedBumpRoad>(c.road.speed_bump);
+    case RoadSource::kSine: return std::make_shared<SineRoad>(c.road.sine);
+    case RoadSource::kSeries: {
+      try {
+        const RoadSeries r = readRoadCsvFile(c.road.series_file);
+        return std::make_shared<SampledRoad>(r.t, r.left, r.right);
+      } catch (const CsvError& e) {
+        throw ConfigError(c.source + ": key 'road.series.file': " + e.what());
+      }
+    }
+    case RoadSource::kTopic: break;
+  }
+  throw std::invalid_argument(c.source + ": road.source is topic but no road samples were given");
+}
+
+std::shared_ptr<const RollPlaneModel> makeModel(const EstimatorConfig& c,
+                                                std::shared_ptr<const RoadInput> road) {
+  return std::make_shared<RollPlaneModel>(c.vehicle, std::move(road));
+}
+
+std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
+                                                   std::shared_ptr<const MechanicalModel> model) {
+  ParameterMapping mapping(*model, c.uncertain);
+  const PolynomialBasis basis(mapping.germs(), c.pc_order);
+  try {
+    const CollocationDesign design(basis, c.collocation.sequence, c.collocation.points,
+                                   c.collocation.start_index, c.collocation.max_condition);
+    return std::make_shared<PcPropagator>(std::move(model), basis, design, std::move(mapping),
+                                          c.integration);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(c.source + ": key 'collocation.points': " + e.what());
+  }
+}
+
+NoiseModel makeNoiseModel(const EstimatorConfig& c) {
+  return NoiseModel{c.measurement.r_relative, c.measurement.r_floor};
+}
+
+OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
+  OneStepSettings s;
+  s.rule = c.update;
+  s.noise = makeNoiseModel(c);
+  s.health.nis_window = c.health.nis_window;
+  s.health.nis_confidence = c.health.nis_confidence;
+  s.health.seed = c.pdf.seed;
+  return s;
+}
+
+EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
+  EnkfSettings s;
+  s.members = c.enkf.members;
+  s.seed = c.enkf.seed;
+  s.noise = makeNoiseModel(c);
+  s.integration = c.integration;
+  s.threads = c.grid.threads;
+  return s;
+}
+
+std::vector<int> channelIndices(const EstimatorConfig& c) {
+  const std::vector<std::string> names{"u1", "u2", "v1", "v2"};
+  std::vector<int> idx;
+  for (int i = 0; i < 4; ++i) {
+    for (const auto& ch : c.measurement.channels) {
+      if (ch == names[i]) idx.push_back(i);
+    }
+  }
+  return idx;
+}
+
+Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model) {
+  const ParameterMapping mapping(model, c.uncertain);
+  const Eigen::VectorXd xi = Eigen::Map<const Eigen::VectorXd>(c.truth.xi.data(), c.truth.xi.size());
+  return mapping.fullParameters(c.parameterValues(xi));
+}
+
+MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
+                                       std::uint64_t seed) {
+  SyntheticDataSettings s;
+  s.times = uniformSampleTimes(c.sampling.samples, c.sampling.duration);
+  s.channels = channelIndices(c);
+  s.noise_relative = c.measurement.noise_relative;
+  s.noise_floor = c.measurement.noise_floor;
+  s.seed = seed;
+  s.integration = c.integration;
+  return synthesizeMeasurements(model, truthParameters(c, model), s);
+}
+
+}  // namespace pc_ekf

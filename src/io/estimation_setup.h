@@ -1,0 +1,37 @@
+// Builds the core objects (model, road, PC design, propagator, filter
+// settings, data) from one EstimatorConfig: the same path for the node and
+// the CLIs.
+#pragma once
+
+#include <memory>
+
+#include "filter/ensemble_kalman_filter.h"
+#include "filter/one_step_filter.h"
+#include "filter/pc_propagator.h"
+#include "filter/synthetic_data.h"
+#include "io/estimator_config.h"
+#include "model/roll_plane_model.h"
+
+namespace pc_ekf {
+
+// Road of the config; `sampled` replaces it when given (road from a bag/topic).
+// Throws ConfigError (series file unreadable) or std::invalid_argument
+// (source topic without samples).
+std::shared_ptr<const RoadInput> makeRoad(const EstimatorConfig& c,
+                                          std::shared_ptr<const RoadInput> sampled = nullptr);
+std::shared_ptr<const RollPlaneModel> makeModel(const EstimatorConfig& c,
+                                                std::shared_ptr<const RoadInput> road);
+// Throws ConfigError naming collocation.points for a degenerate design.
+std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
+                                                   std::shared_ptr<const MechanicalModel> model);
+OneStepSettings makeOneStepSettings(const EstimatorConfig& c);
+EnkfSettings makeEnkfSettings(const EstimatorConfig& c);
+NoiseModel makeNoiseModel(const EstimatorConfig& c);
+std::vector<int> channelIndices(const EstimatorConfig& c);
+
+// Synthetic data of the config (truth xi, sampling, noise) with `seed`.
+MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
+                                       std::uint64_t seed);
+Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model);
+
+}  // namespace pc_ekf

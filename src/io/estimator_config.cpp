@@ -1,0 +1,310 @@
+#include "io/estimator_config.h"
+
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "io/yaml_reader.h"
+#include "pc/polynomial_basis.h"
+
+namespace pc_ekf {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+void readVehicle(YamlMapReader r, VehicleParameters& v) {
+  Eigen::VectorXd p = v.toVector();
+  const auto& names = vehicleParameterNames();
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const std::string& n = names[i];
+    if (n == "damping_left" || n == "damping_right" || n == "spring_cubic_left" ||
+        n == "spring_cubic_right" || n == "added_mass") {
+      r.number(n, p[i], 0.0, kInf);
+    } else if (n != "added_mass_position") {
+      r.number(n, p[i], 0.0, kInf, true);
+    }
+  }
+  const int length = static_cast<int>(std::find(names.begin(), names.end(), "bar_length") -
+                                       names.begin());
+  const int position = static_cast<int>(
+      std::find(names.begin(), names.end(), "added_mass_position") - names.begin());
+  r.number("added_mass_position", p[position], 0.0, p[length]);
+  std::string damper = v.damper == DamperLaw::kTanh ? "tanh" : "linear";
+  r.text("damper", damper);
+  if (damper != "tanh" && damper != "linear") r.fail("damper", "'" + damper + "'", "tanh or linear");
+  v = VehicleParameters::fromVector(p, v);
+  v.damper = damper == "tanh" ? DamperLaw::kTanh : DamperLaw::kLinear;
+  r.number("damper_tanh_scale", v.damper_tanh_scale, 0.0, kInf, true);
+  r.number("damper_tanh_rate", v.damper_tanh_rate, 0.0, kInf, true);
+  r.finish();
+}
+
+GermSpec readGerm(YamlMapReader r) {
+  GermSpec g;
+  std::string family = "beta";
+  r.text("family", family);
+  try {
+    g.family = germFamilyFromString(family);
+  } catch (const std::invalid_argument&) {
+    r.fail("family", "'" + family + "'", "beta, uniform, gaussian or gamma");
+  }
+  if (g.family == GermFamily::kBeta || g.family == GermFamily::kGamma) {
+    r.number("alpha", g.alpha, 0.0, kInf, true);
+  }
+  if (g.family == GermFamily::kBeta) r.number("beta", g.beta, 0.0, kInf, true);
+  r.finish();
+  return g;
+}
+
+std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const VehicleParameters& v) {
+  std::vector<UncertainParameter> out;
+  const YAML::Node seq = root.sequence("uncertain");
+  if (!seq.IsDefined() || seq.IsNull() || seq.size() == 0) {
+    root.fail("uncertain", "(empty)", "a list of at least one uncertain parameter");
+  }
+  const auto& names = vehicleParameterNames();
+  const Eigen::VectorXd values = v.toVector();
+  std::set<std::string> seen;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    YamlMapReader r(seq[i], root.keyPath("uncertain[" + std::to_string(i) + "]"), root.source());
+    UncertainParameter u;
+    r.text("name", u.name);
+    const auto it = std::find(names.begin(), names.end(), u.name);
+    if (it == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      r.fail("name", "'" + u.name + "'", "one of " + list);
+    }
+    if (!seen.insert(u.name).second) r.fail("name", "'" + u.name + "'", "each parameter once");
+    u.nominal = values[it - names.begin()];
+    r.number("nominal", u.nominal, -kInf, kInf);
+    r.number("relative_range", u.relative_range, 0.0, kInf, true);
+    u.germ = readGerm(r.map("germ"));
+    r.finish();
+    out.push_back(u);
+  }
+  return out;
+}
+
+RoadConfig readRoad(YamlMapReader r) {
+  RoadConfig road;
+  std::string source = toString(road.source);
+  r.text("source", source);
+  if (source == "speed_bump") road.source = RoadSource::kSpeedBump;
+  else if (source == "sine") road.source = RoadSource::kSine;
+  else if (source == "series") road.source = RoadSource::kSeries;
+  else if (source == "topic") road.source = RoadSource::kTopic;
+  else r.fail("source", "'" + source + "'", "speed_bump, sine, series or topic");
+
+  YamlMapReader b = r.map("speed_bump");
+  SpeedBumpSettings& s = road.speed_bump;
+  b.number("speed_kmh", s.speed_kmh, 0.0, kInf, true);
+  b.number("height_left", s.height_left, -kInf, kInf);
+  b.number("height_right", s.height_right, -kInf, kInf);
+  b.number("ramp_up_length", s.ramp_up_length, 0.0, kInf, true);
+  b.number("flat_length", s.flat_length, 0.0, kInf);
+  b.number("ramp_down_length", s.ramp_down_length, 0.0, kInf, true);
+  b.number("delay_fraction", s.delay_fraction, 0.0, kInf);
+  b.number("start_distance", s.start_distance, 0.0, kInf);
+  b.finish();
+
+  YamlMapReader n = r.map("sine");
+  n.number("amplitude", road.sine.amplitude, -kInf, kInf);
+  n.number("frequency", road.sine.frequency, 0.0, kInf, true);
+  n.number("right_sign", road.sine.right_sign, -1.0, 1.0);
+  n.finish();
+
+  YamlMapReader f = r.map("series");
+  f.text("file", road.series_file);
+  f.finish();
+  if (road.source == RoadSource::kSeries && road.series_file.empty()) {
+    f.fail("file", "(empty)", "a road CSV path (t,y1,y2) when road.source is series");
+  }
+  r.finish();
+  return road;
+}
+
+std::size_t basisSize(int n, int p) {
+  double s = 1.0;  // C(n + p, p)
+  for (int i = 1; i <= p; ++i) s = s * (n + i) / i;
+  return static_cast<std::size_t>(std::llround(s));
+}
+
+void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
+  YamlMapReader f = root.map("filter");
+  std::string update = toString(c.update);
+  f.text("update", update);
+  try {
+    c.update = updateRuleFromString(update);
+  } catch (const std::invalid_argument&) {
+    f.fail("update", "'" + update + "'", "paper or square_root");
+  }
+  YamlMapReader e = f.map("es_mda");
+  e.numberList("alphas", c.es_mda.alphas, 1, 100);
+  double inv = 0.0;
+  for (double a : c.es_mda.alphas) {
+    if (!(a > 0.0)) e.fail("alphas", std::to_string(a), "positive inflation factors");
+    inv += 1.0 / a;
+  }
+  if (std::abs(inv - 1.0) > 1e-9) {
+    e.fail("alphas", "with sum(1/alpha) = " + std::to_string(inv), "sum(1/alpha) = 1");
+  }
+  e.finish();
+  YamlMapReader k = f.map("enkf");
+  k.integer("members", c.enkf.members, 2, 10000000);
+  k.unsignedInteger("seed", c.enkf.seed);
+  k.finish();
+  YamlMapReader g = f.map("grid");
+  g.integer("coarse_points", c.grid.coarse_points, 3, 100001);
+  g.integer("fine_points", c.grid.fine_points, 5, 100001);
+  g.number("fine_span_sigmas", c.grid.fine_span_sigmas, 0.0, kInf, true);
+  g.number("border_mass_tolerance", c.grid.border_mass_tolerance, 0.0, 1.0, true);
+  g.integer("threads", c.grid.threads, 1, 256);
+  g.finish();
+  f.finish();
+
+  YamlMapReader h = root.map("health");
+  h.integer("nis_window", c.health.nis_window, 1, 1000000);
+  h.number("nis_confidence", c.health.nis_confidence, 0.0, 1.0, true);
+  h.integer("coherence_decimation", c.health.coherence_decimation, 2, 1000000);
+  h.number("coherence_threshold", c.health.coherence_threshold, 0.0, kInf, true);
+  h.finish();
+
+  YamlMapReader d = root.map("pdf");
+  d.integer("draws", c.pdf.draws, 100, 100000000);
+  d.integer("bins", c.pdf.bins, 2, 100000);
+  d.unsignedInteger("seed", c.pdf.seed);
+  d.finish();
+}
+
+}  // namespace
+
+std::string toString(RoadSource s) {
+  switch (s) {
+    case RoadSource::kSpeedBump: return "speed_bump";
+    case RoadSource::kSine: return "sine";
+    case RoadSource::kSeries: return "series";
+    case RoadSource::kTopic: return "topic";
+  }
+  return "?";
+}
+
+std::vector<GermSpec> EstimatorConfig::germs() const {
+  std::vector<GermSpec> g;
+  for (const auto& u : uncertain) g.push_back(u.germ);
+  return g;
+}
+
+Eigen::VectorXd EstimatorConfig::parameterValues(const Eigen::VectorXd& xi) const {
+  Eigen::VectorXd v(uncertain.size());
+  for (std::size_t i = 0; i < uncertain.size(); ++i) {
+    v[i] = uncertain[i].nominal * (1.0 + uncertain[i].relative_range * xi[i]);
+  }
+  return v;
+}
+
+EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_name) {
+  EstimatorConfig c;
+  c.source = source_name;
+  YamlMapReader root(node, "", source_name);
+  readVehicle(root.map("vehicle"), c.vehicle);
+  c.uncertain = readUncertain(root, c.vehicle);
+  const int n = static_cast<int>(c.uncertain.size());
+
+  YamlMapReader pc = root.map("pc");
+  pc.integer("order", c.pc_order, 0, 20);
+  pc.finish();
+  const std::size_t terms = basisSize(n, c.pc_order);
+
+  YamlMapReader col = root.map("collocation");
+  std::string seq = toString(c.collocation.sequence);
+  col.text("sequence", seq);
+  try {
+    c.collocation.sequence = pointSequenceFromString(seq);
+  } catch (const std::invalid_argument&) {
+    col.fail("sequence", "'" + seq + "'", "halton, hammersley or gauss");
+  }
+  col.integer("points", c.collocation.points, 1, 1000000);
+  col.unsignedInteger("start_index", c.collocation.start_index);
+  col.number("max_condition", c.collocation.max_condition, 1.0, kInf);
+  const double q = c.collocation.sequence == PointSequence::kGauss
+                       ? std::pow(c.collocation.points, n)
+                       : c.collocation.points;
+  if (q < terms) {
+    col.fail("points", std::to_string(c.collocation.points),
+             "at least S = " + std::to_string(terms) + " collocation points (basis terms for " +
+                 std::to_string(n) + " germs, order " + std::to_string(c.pc_order) + ")");
+  }
+  col.finish();
+
+  c.road = readRoad(root.map("road"));
+
+  YamlMapReader s = root.map("sampling");
+  s.integer("samples", c.sampling.samples, 1, 100000000);
+  s.number("duration", c.sampling.duration, 0.0, kInf, true);
+  s.finish();
+
+  YamlMapReader m = root.map("measurement");
+  m.textList("channels", c.measurement.channels);
+  const std::set<std::string> known{"u1", "u2", "v1", "v2"};
+  std::set<std::string> seen;
+  for (const auto& ch : c.measurement.channels) {
+    if (!known.count(ch) || !seen.insert(ch).second) {
+      m.fail("channels", "'" + ch + "'", "distinct channels among u1, u2, v1, v2");
+    }
+  }
+  if (c.measurement.channels.empty()) m.fail("channels", "(empty)", "at least one channel");
+  m.number("noise_relative", c.measurement.noise_relative, 0.0, kInf);
+  m.number("noise_floor", c.measurement.noise_floor, 0.0, kInf);
+  m.number("r_relative", c.measurement.r_relative, 0.0, kInf);
+  m.number("r_floor", c.measurement.r_floor, 0.0, kInf, true);
+  m.finish();
+
+  YamlMapReader t = root.map("truth");
+  c.truth.xi.assign(n, 0.0);
+  t.numberList("xi", c.truth.xi, n, n);
+  for (int i = 0; i < n; ++i) {
+    const GermFamily f = c.uncertain[i].germ.family;
+    const bool bounded = f == GermFamily::kBeta || f == GermFamily::kUniform;
+    if ((bounded && std::abs(c.truth.xi[i]) > 1.0) || (f == GermFamily::kGamma && c.truth.xi[i] < 0)) {
+      t.fail("xi[" + std::to_string(i) + "]", std::to_string(c.truth.xi[i]),
+             "a point in the support of germ " + describe(c.uncertain[i].germ));
+    }
+  }
+  t.unsignedInteger("seed", c.truth.seed);
+  t.finish();
+
+  YamlMapReader integ = root.map("integration");
+  integ.number("max_step", c.integration.max_step, 0.0, 1.0, true);
+  integ.finish();
+
+  readFilterSections(root, c);
+  root.finish();
+  return c;
+}
+
+EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name) {
+  YAML::Node node;
+  try {
+    node = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(source_name + ": line " + std::to_string(e.mark.line + 1) +
+                      ": not valid YAML (" + e.msg + ")");
+  }
+  return parseConfig(node, source_name);
+}
+
+EstimatorConfig loadConfigFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open the configuration file");
+  std::stringstream text;
+  text << in.rdbuf();
+  return parseConfigString(text.str(), path);
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,128 @@
+// The one configuration schema shared by estimator_node and the CLIs
+// (YAML, rosparam-friendly: plain maps, lists and scalars only).
+// See config/speed_bump.yaml for every key with its meaning and default.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "filter/kalman_update.h"
+#include "filter/uncertain_parameters.h"
+#include "model/integrator.h"
+#include "model/road_input.h"
+#include "model/roll_plane_model.h"
+#include "pc/collocation_design.h"
+#include "pc/germ.h"
+
+namespace YAML {
+class Node;
+}
+
+namespace pc_ekf {
+
+// Bad configuration: the message names the source, the key, the value and
+// what was expected.
+class ConfigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+enum class RoadSource { kSpeedBump, kSine, kSeries, kTopic };
+std::string toString(RoadSource s);
+
+struct RoadConfig {
+  RoadSource source = RoadSource::kSpeedBump;
+  SpeedBumpSettings speed_bump;
+  SineSettings sine;
+  std::string series_file;  // road CSV t,y1,y2 (source: series)
+};
+
+// Samples at t_k = k * duration / samples, k = 1..samples (SPEC §1.6).
+struct SamplingConfig {
+  int samples = 10;
+  double duration = 3.0;
+  double interval() const { return duration / samples; }
+};
+
+struct MeasurementConfig {
+  std::vector<std::string> channels{"u1", "u2", "v1", "v2"};
+  double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
+  double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
+  double r_relative = 0.01;      // filter: R_jj = max(r_floor, (r_relative z_obs,j)^2)
+  double r_floor = 1e-12;
+};
+
+struct TruthConfig {
+  std::vector<double> xi;  // germ coordinates of the truth, one per uncertain parameter
+  std::uint64_t seed = 1;  // measurement-noise seed
+};
+
+struct CollocationConfig {
+  PointSequence sequence = PointSequence::kHalton;
+  int points = 30;
+  std::uint64_t start_index = 1;
+  double max_condition = 1e8;
+};
+
+struct EsMdaConfig {
+  std::vector<double> alphas{4.0, 4.0, 4.0, 4.0};  // sum of 1/alpha must be 1
+};
+
+struct EnkfConfig {
+  int members = 200;
+  std::uint64_t seed = 7;
+};
+
+struct GridConfig {
+  int coarse_points = 101;    // per germ dimension, on the prior support
+  int fine_points = 33;       // per principal axis around each mode
+  double fine_span_sigmas = 8.0;
+  double border_mass_tolerance = 1e-6;
+  int threads = 2;
+};
+
+struct HealthConfig {
+  int nis_window = 10;
+  double nis_confidence = 0.99;  // two-sided
+  int coherence_decimation = 10;
+  double coherence_threshold = 3.0;
+};
+
+struct PdfConfig {
+  int draws = 100000;
+  int bins = 60;
+  std::uint64_t seed = 11;
+};
+
+struct EstimatorConfig {
+  std::string source = "<config>";  // file name, for messages
+  VehicleParameters vehicle;
+  std::vector<UncertainParameter> uncertain;
+  int pc_order = 4;
+  CollocationConfig collocation;
+  RoadConfig road;
+  SamplingConfig sampling;
+  MeasurementConfig measurement;
+  TruthConfig truth;
+  IntegratorSettings integration;
+  UpdateRule update = UpdateRule::kSquareRoot;
+  EsMdaConfig es_mda;
+  EnkfConfig enkf;
+  GridConfig grid;
+  HealthConfig health;
+  PdfConfig pdf;
+
+  std::vector<GermSpec> germs() const;
+  // Parameter values at germ point xi (one entry per uncertain parameter).
+  Eigen::VectorXd parameterValues(const Eigen::VectorXd& xi) const;
+};
+
+// Throws ConfigError.
+EstimatorConfig loadConfigFile(const std::string& path);
+EstimatorConfig parseConfig(const YAML::Node& root, const std::string& source_name);
+EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name);
+
+}  // namespace pc_ekf

@@ -1,0 +1,149 @@
+#include "io/measurement_csv.h"
+
+#include <cmath>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <sstream>
+
+namespace pc_ekf {
+namespace {
+
+std::vector<std::string> splitCells(const std::string& line) {
+  std::vector<std::string> cells;
+  std::string cell;
+  std::istringstream in(line);
+  while (std::getline(in, cell, ',')) cells.push_back(cell);
+  if (!line.empty() && line.back() == ',') cells.emplace_back();
+  return cells;
+}
+
+std::string trim(const std::string& s) {
+  const auto b = s.find_first_not_of(" \t\r");
+  if (b == std::string::npos) return "";
+  const auto e = s.find_last_not_of(" \t\r");
+  return s.substr(b, e - b + 1);
+}
+
+[[noreturn]] void fail(const std::string& source, int line, const std::string& what) {
+  throw CsvError(source + ": line " + std::to_string(line) + ": " + what);
+}
+
+// Parses one cell; empty or "nan" -> NaN when `missing_ok`.
+double parseCell(const std::string& raw, bool missing_ok, const std::string& source, int line,
+                 const std::string& column) {
+  const std::string s = trim(raw);
+  std::string lower = s;
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (s.empty() || lower == "nan") {
+    if (missing_ok) return std::numeric_limits<double>::quiet_NaN();
+    fail(source, line, "column '" + column + "' is empty, expected a number");
+  }
+  std::istringstream in(s);
+  in.imbue(std::locale::classic());
+  double v = 0.0;
+  in >> v;
+  if (in.fail() || !in.eof() || !std::isfinite(v)) {
+    fail(source, line, "column '" + column + "': '" + s + "' is not a finite number");
+  }
+  return v;
+}
+
+// Reads header + rows of numbers; the first column is time, strictly increasing.
+std::vector<std::vector<double>> readTable(std::istream& in, const std::string& source,
+                                           const std::vector<std::string>& header, bool missing_ok) {
+  std::string line;
+  int number = 0;
+  std::string expected;
+  for (const auto& h : header) expected += (expected.empty() ? "" : ",") + h;
+  while (std::getline(in, line)) {
+    ++number;
+    if (!trim(line).empty()) break;
+  }
+  std::vector<std::string> got = splitCells(line);
+  for (auto& g : got) g = trim(g);
+  if (got != header) fail(source, number, "header '" + trim(line) + "', expected '" + expected + "'");
+  std::vector<std::vector<double>> rows;
+  while (std::getline(in, line)) {
+    ++number;
+    if (trim(line).empty()) continue;
+    const auto cells = splitCells(line);
+    if (cells.size() != header.size()) {
+      fail(source, number, std::to_string(cells.size()) + " cells, expected " +
+                               std::to_string(header.size()) + " (" + expected + ")");
+    }
+    std::vector<double> row(cells.size());
+    row[0] = parseCell(cells[0], false, source, number, header[0]);
+    for (std::size_t c = 1; c < cells.size(); ++c) {
+      row[c] = parseCell(cells[c], missing_ok, source, number, header[c]);
+    }
+    if (!rows.empty() && !(row[0] > rows.back()[0])) {
+      fail(source, number, "time " + trim(cells[0]) + " is not after the previous row's");
+    }
+    if (row[0] < 0.0) fail(source, number, "time " + trim(cells[0]) + " is negative");
+    rows.push_back(row);
+  }
+  if (rows.empty()) fail(source, number, "no data rows after the header");
+  return rows;
+}
+
+std::ifstream openOrThrow(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw CsvError(path + ": cannot open the file");
+  return in;
+}
+
+}  // namespace
+
+MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source) {
+  MeasurementSeries series;
+  for (const auto& row : readTable(in, source, {"t", "u1", "u2", "v1", "v2"}, true)) {
+    Measurement m;
+    m.time = row[0];
+    std::vector<double> values;
+    for (int c = 0; c < 4; ++c) {
+      if (std::isnan(row[c + 1])) continue;
+      m.channels.push_back(c);
+      values.push_back(row[c + 1]);
+    }
+    m.values = Eigen::Map<Eigen::VectorXd>(values.data(), values.size());
+    series.push_back(m);
+  }
+  return series;
+}
+
+MeasurementSeries readMeasurementCsvFile(const std::string& path) {
+  std::ifstream in = openOrThrow(path);
+  return readMeasurementCsv(in, path);
+}
+
+void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series) {
+  out << "t,u1,u2,v1,v2\n" << std::setprecision(17);
+  for (const auto& m : series) {
+    out << m.time;
+    for (int c = 0; c < 4; ++c) {
+      out << ',';
+      for (std::size_t i = 0; i < m.channels.size(); ++i) {
+        if (m.channels[i] == c) out << m.values[i];
+      }
+    }
+    out << '\n';
+  }
+}
+
+RoadSeries readRoadCsv(std::istream& in, const std::string& source) {
+  RoadSeries road;
+  for (const auto& row : readTable(in, source, {"t", "y1", "y2"}, false)) {
+    road.t.push_back(row[0]);
+    road.left.push_back(row[1]);
+    road.right.push_back(row[2]);
+  }
+  return road;
+}
+
+RoadSeries readRoadCsvFile(const std::string& path) {
+  std::ifstream in = openOrThrow(path);
+  return readRoadCsv(in, path);
+}
+
+}  // namespace pc_ekf

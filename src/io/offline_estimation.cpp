@@ -1,0 +1,214 @@
+#include "io/offline_estimation.h"
+
+#include <chrono>
+#include <stdexcept>
+
+#include "filter/batch_update.h"
+#include "filter/ensemble_kalman_filter.h"
+#include "filter/one_step_filter.h"
+#include "filter/reference_posterior.h"
+#include "io/estimation_setup.h"
+
+namespace pc_ekf {
+
+std::string toString(EstimationMethod m) {
+  switch (m) {
+    case EstimationMethod::kOneStep: return "one_step";
+    case EstimationMethod::kWholeSet: return "whole_set";
+    case EstimationMethod::kEsMda: return "es_mda";
+    case EstimationMethod::kEnkf: return "enkf";
+    case EstimationMethod::kGrid: return "grid";
+  }
+  return "?";
+}
+
+EstimationMethod estimationMethodFromString(const std::string& s) {
+  for (auto m : {EstimationMethod::kOneStep, EstimationMethod::kWholeSet, EstimationMethod::kEsMda,
+                 EstimationMethod::kEnkf, EstimationMethod::kGrid}) {
+    if (toString(m) == s) return m;
+  }
+  throw std::invalid_argument("method '" + s +
+                              "' unknown, expected one_step, whole_set, es_mda, enkf or grid");
+}
+
+namespace {
+
+void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eigen::VectorXd& sd,
+               OfflineResult* r) {
+  r->parameters.clear();
+  for (std::size_t i = 0; i < c.uncertain.size(); ++i) {
+    const UncertainParameter& u = c.uncertain[i];
+    const double scale = u.nominal * u.relative_range;
+    r->parameters.push_back({u.name, mean[i], sd[i], (mean[i] - u.nominal) / scale, sd[i] / scale});
+  }
+}
+
+std::vector<Histogram> pcPdfs(const EstimatorConfig& c, const PolynomialBasis& basis,
+                              const Eigen::MatrixXd& coeffs) {
+  std::vector<Histogram> pdfs;
+  if (!coeffs.allFinite()) return pdfs;
+  for (Eigen::Index i = 0; i < coeffs.rows(); ++i) {
+    pdfs.push_back(pcHistogram(basis, coeffs.row(i).transpose(), c.pdf.draws, c.pdf.bins,
+                               c.pdf.seed + static_cast<std::uint64_t>(i)));
+  }
+  return pdfs;
+}
+
+Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
+  Histogram h;
+  double lo = v.minCoeff(), hi = v.maxCoeff();
+  if (!(hi > lo)) {
+    lo -= 0.5;
+    hi += 0.5;
+  }
+  h.edges = Eigen::VectorXd::LinSpaced(bins + 1, lo, hi);
+  h.densities = Eigen::VectorXd::Zero(bins);
+  const double width = (hi - lo) / bins;
+  for (double x : v) {
+    const int b = std::min(bins - 1, static_cast<int>((x - lo) / width));
+    h.densities[b] += 1.0;
+  }
+  h.densities /= v.size() * width;
+  return h;
+}
+
+void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
+                std::shared_ptr<const PcPropagator> prop, OfflineResult* r) {
+  const OneStepSettings settings = makeOneStepSettings(c);
+  OneStepFilter filter(prop, settings);
+  StepResult last;
+  int nested = 0, forecast_problems = 0;
+  bool nonfinite = false;
+  for (const Measurement& m : series) {
+    last = filter.process(m);
+    SampleRecord rec{last.index, last.time, last.mean, last.stddev, last.coefficients,
+                     last.health.nis, last.health.nis_window_outside, last.health.band_nested,
+                     last.health.healthy()};
+    r->records.push_back(rec);
+    r->nis_window_violations += last.health.nis_window_outside;
+    nested += last.health.band_nested;
+    forecast_problems += last.forecast.invalid_points + last.forecast.nonfinite_points > 0;
+    nonfinite = nonfinite || last.health.non_finite || last.health.forecast_failed;
+  }
+  r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
+  summarise(c, last.mean, last.stddev, r);
+  r->pdfs = pcPdfs(c, prop->basis(), last.coefficients);
+  r->integrations = prop->integrations();
+  for (const auto& w : last.health.warnings()) r->warnings.push_back(w);
+  if (forecast_problems) {
+    r->warnings.push_back(std::to_string(forecast_problems) +
+                          " samples had collocation points outside the model's domain");
+  }
+  r->healthy = !nonfinite && !last.health.nis_window_outside;
+
+  // Multi-rate coherence (SPEC §3.6): the same filter on every k-th sample.
+  const int k = c.health.coherence_decimation;
+  const MeasurementSeries dec = decimate(series, k);
+  r->coherence.decimation = k;
+  r->coherence.threshold = c.health.coherence_threshold;
+  if (dec.size() >= 1 && series.size() >= 2 * dec.size()) {
+    OneStepFilter coarse(prop, settings);
+    StepResult d;
+    for (const Measurement& m : dec) d = coarse.process(m);
+    r->coherence.available = true;
+    r->coherence.disagreement = coherenceDisagreement(last.mean, last.stddev, d.mean, d.stddev);
+    r->coherence.flagged =
+        !(r->coherence.disagreement.array() <= c.health.coherence_threshold).all();
+    if (r->coherence.flagged) {
+      r->warnings.push_back("multi-rate coherence check: full and decimated streams disagree");
+      r->healthy = false;
+    }
+  }
+}
+
+void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
+              std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
+              OfflineResult* r) {
+  const BatchResult b = batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas);
+  SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
+                   b.coefficients, b.nis, false, true, b.finite && b.forecast.ok};
+  r->records.push_back(rec);
+  summarise(c, b.mean, b.stddev, r);
+  r->pdfs = pcPdfs(c, prop->basis(), b.coefficients);
+  r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
+  r->healthy = b.finite && b.forecast.ok;
+  if (!b.forecast.first_problem.empty()) r->warnings.push_back(b.forecast.first_problem);
+}
+
+void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
+             std::shared_ptr<const RollPlaneModel> model, std::uint64_t seed,
+             const ProgressCallback& progress, OfflineResult* r) {
+  EnkfSettings s = makeEnkfSettings(c);
+  s.seed = c.enkf.seed + seed;
+  EnsembleKalmanFilter enkf(model, ParameterMapping(*model, c.uncertain), s);
+  EnkfStep last;
+  int frozen = 0;
+  for (std::size_t i = 0; i < series.size(); ++i) {
+    last = enkf.process(series[i]);
+    frozen = std::max(frozen, last.inadmissible_members);
+    r->records.push_back({last.index, last.time, last.mean, last.stddev, Eigen::MatrixXd(),
+                          last.nis, false, true, last.finite});
+    if (progress && (i + 1) % 10 == 0) {
+      progress("enkf: sample " + std::to_string(i + 1) + "/" + std::to_string(series.size()));
+    }
+  }
+  summarise(c, last.mean, last.stddev, r);
+  for (Eigen::Index i = 0; i < enkf.parameters().rows(); ++i) {
+    r->pdfs.push_back(sampleHistogram(enkf.parameters().row(i).transpose(), c.pdf.bins));
+  }
+  r->integrations = enkf.integrations();
+  r->healthy = last.finite;
+  if (frozen) {
+    r->warnings.push_back(std::to_string(frozen) + " ensemble members left the model's domain");
+  }
+}
+
+void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
+             std::shared_ptr<const RollPlaneModel> model, const ProgressCallback& progress,
+             OfflineResult* r) {
+  ReferencePosteriorSettings s;
+  s.coarse_points = c.grid.coarse_points;
+  s.fine_points = c.grid.fine_points;
+  s.fine_span_sigmas = c.grid.fine_span_sigmas;
+  s.border_mass_tolerance = c.grid.border_mass_tolerance;
+  s.threads = c.grid.threads;
+  s.bins = c.pdf.bins;
+  const ReferencePosterior p =
+      computeReferencePosterior(*model, ParameterMapping(*model, c.uncertain), series,
+                                makeNoiseModel(c), c.integration, s, nullptr, progress);
+  summarise(c, p.mean, p.stddev, r);
+  r->records.push_back({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time,
+                        p.mean, p.stddev, Eigen::MatrixXd(), 0.0, false, true, true});
+  r->pdfs = p.marginals;
+  r->integrations = p.simulations;
+  r->modes = static_cast<int>(p.modes.size());
+  r->border_mass = p.border_mass;
+  if (p.modes.size() > 1) r->warnings.push_back("posterior has " + std::to_string(p.modes.size()) + " modes");
+  if (p.border_mass > 1e-3) r->warnings.push_back("fine grid border mass above 1e-3");
+}
+
+}  // namespace
+
+OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,
+                                   std::shared_ptr<const RollPlaneModel> model,
+                                   EstimationMethod method, std::uint64_t seed,
+                                   const ProgressCallback& progress) {
+  const auto start = std::chrono::steady_clock::now();
+  OfflineResult r;
+  r.method = toString(method);
+  r.update = toString(c.update);
+  r.samples = static_cast<int>(series.size());
+  switch (method) {
+    case EstimationMethod::kOneStep: runOneStep(c, series, makePropagator(c, model), &r); break;
+    case EstimationMethod::kWholeSet: runBatch(c, series, makePropagator(c, model), {1.0}, &r); break;
+    case EstimationMethod::kEsMda:
+      runBatch(c, series, makePropagator(c, model), c.es_mda.alphas, &r);
+      break;
+    case EstimationMethod::kEnkf: runEnkf(c, series, model, seed, progress, &r); break;
+    case EstimationMethod::kGrid: runGrid(c, series, model, progress, &r); break;
+  }
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
+}  // namespace pc_ekf

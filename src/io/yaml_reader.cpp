@@ -1,0 +1,167 @@
+#include "io/yaml_reader.h"
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "io/estimator_config.h"
+
+namespace pc_ekf {
+
+std::string yamlValueText(const YAML::Node& node) {
+  if (!node.IsDefined() || node.IsNull()) return "(empty)";
+  if (node.IsScalar()) return "'" + node.Scalar() + "'";
+  if (node.IsSequence()) return "a list of " + std::to_string(node.size());
+  return "a map";
+}
+
+YamlMapReader::YamlMapReader(const YAML::Node& node, std::string path, std::string source)
+    : node_(node), path_(std::move(path)), source_(std::move(source)) {
+  if (node_.IsDefined() && !node_.IsNull() && !node_.IsMap()) {
+    throw ConfigError(source_ + ": key '" + (path_.empty() ? "(root)" : path_) + "': value " +
+                      yamlValueText(node_) + " invalid, expected a map of keys");
+  }
+}
+
+std::string YamlMapReader::keyPath(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+void YamlMapReader::fail(const std::string& key, const std::string& value,
+                         const std::string& expected) const {
+  throw ConfigError(source_ + ": key '" + keyPath(key) + "': value " + value + " invalid, expected " +
+                    expected);
+}
+
+bool YamlMapReader::has(const std::string& key) const {
+  return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull();
+}
+
+YamlMapReader YamlMapReader::map(const std::string& key) {
+  read_.insert(key);
+  if (!has(key)) return YamlMapReader(YAML::Node(), keyPath(key), source_);
+  const YAML::Node child = node_[key];
+  if (!child.IsMap()) fail(key, yamlValueText(child), "a map of keys");
+  return YamlMapReader(child, keyPath(key), source_);
+}
+
+YAML::Node YamlMapReader::sequence(const std::string& key) {
+  read_.insert(key);
+  if (!has(key)) return YAML::Node();
+  const YAML::Node child = node_[key];
+  if (!child.IsSequence()) fail(key, yamlValueText(child), "a list");
+  return child;
+}
+
+namespace {
+
+bool parseDouble(const YAML::Node& n, double& out) {
+  if (!n.IsScalar()) return false;
+  std::string s = n.Scalar();
+  // YAML spellings of infinity/NaN are refused below anyway; accept plain numbers only.
+  std::istringstream in(s);
+  in.imbue(std::locale::classic());
+  in >> out;
+  return !in.fail() && in.eof();
+}
+
+std::string rangeText(double min, double max, bool min_exclusive) {
+  std::ostringstream o;
+  const double inf = std::numeric_limits<double>::infinity();
+  if (max == inf && min == 0.0 && min_exclusive) return "a positive number";
+  if (max == inf && min == 0.0) return "a non-negative number";
+  if (max == inf && min == -inf) return "a finite number";
+  o << "a number in " << (min_exclusive ? "(" : "[") << min << ", " << max << "]";
+  return o.str();
+}
+
+}  // namespace
+
+void YamlMapReader::number(const std::string& key, double& value, double min, double max,
+                           bool min_exclusive) {
+  read_.insert(key);
+  if (!has(key)) return;
+  double v = 0.0;
+  const YAML::Node n = node_[key];
+  const bool ok = parseDouble(n, v) && std::isfinite(v) && v <= max &&
+                  (min_exclusive ? v > min : v >= min);
+  if (!ok) fail(key, yamlValueText(n), rangeText(min, max, min_exclusive));
+  value = v;
+}
+
+void YamlMapReader::integer(const std::string& key, int& value, int min, int max) {
+  read_.insert(key);
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  double v = 0.0;
+  if (!parseDouble(n, v) || v != std::floor(v) || v < min || v > max) {
+    fail(key, yamlValueText(n),
+         "an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "]");
+  }
+  value = static_cast<int>(v);
+}
+
+void YamlMapReader::unsignedInteger(const std::string& key, std::uint64_t& value) {
+  read_.insert(key);
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  const std::string s = n.IsScalar() ? n.Scalar() : "";
+  if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 19) {
+    fail(key, yamlValueText(n), "a non-negative integer");
+  }
+  value = std::stoull(s);
+}
+
+void YamlMapReader::text(const std::string& key, std::string& value) {
+  read_.insert(key);
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  if (!n.IsScalar()) fail(key, yamlValueText(n), "a text value");
+  value = n.Scalar();
+}
+
+void YamlMapReader::numberList(const std::string& key, std::vector<double>& value,
+                               std::size_t size_min, std::size_t size_max) {
+  const YAML::Node seq = sequence(key);
+  if (!seq.IsDefined() || seq.IsNull()) return;
+  const std::string expected =
+      size_min == size_max ? "a list of " + std::to_string(size_min) + " numbers"
+                           : "a list of " + std::to_string(size_min) + " to " +
+                                 std::to_string(size_max) + " numbers";
+  if (seq.size() < size_min || seq.size() > size_max) fail(key, yamlValueText(seq), expected);
+  std::vector<double> out;
+  for (const auto& item : seq) {
+    double v = 0.0;
+    if (!parseDouble(item, v) || !std::isfinite(v)) {
+      fail(key + "[" + std::to_string(out.size()) + "]", yamlValueText(item), "a finite number");
+    }
+    out.push_back(v);
+  }
+  value = out;
+}
+
+void YamlMapReader::textList(const std::string& key, std::vector<std::string>& value) {
+  const YAML::Node seq = sequence(key);
+  if (!seq.IsDefined() || seq.IsNull()) return;
+  std::vector<std::string> out;
+  for (const auto& item : seq) {
+    if (!item.IsScalar()) {
+      fail(key + "[" + std::to_string(out.size()) + "]", yamlValueText(item), "a text value");
+    }
+    out.push_back(item.Scalar());
+  }
+  value = out;
+}
+
+void YamlMapReader::finish() const {
+  if (!node_.IsMap()) return;
+  for (const auto& kv : node_) {
+    const std::string key = kv.first.as<std::string>();
+    if (!read_.count(key)) {
+      throw ConfigError(source_ + ": key '" + keyPath(key) + "': unknown key (value " +
+                        yamlValueText(kv.second) + "); see config/speed_bump.yaml for the schema");
+    }
+  }
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,53 @@
+// Strict reading of one YAML map: every value is checked, every key must be
+// known, and errors name the file, the full key path, the value and what was
+// expected.
+#pragma once
+
+#include <yaml-cpp/yaml.h>
+
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace pc_ekf {
+
+class YamlMapReader {
+ public:
+  // `node` must be a map (or absent/null, read as empty); `path` is its key path
+  // ("" for the root), `source` the file name.
+  YamlMapReader(const YAML::Node& node, std::string path, std::string source);
+
+  bool has(const std::string& key) const;
+  YamlMapReader map(const std::string& key);  // absent -> empty map
+  YAML::Node sequence(const std::string& key);  // absent -> null node
+
+  // Each reads `key` if present into `value` (which holds the default).
+  void number(const std::string& key, double& value, double min, double max,
+              bool min_exclusive = false);
+  void integer(const std::string& key, int& value, int min, int max);
+  void unsignedInteger(const std::string& key, std::uint64_t& value);
+  void text(const std::string& key, std::string& value);
+  void numberList(const std::string& key, std::vector<double>& value, std::size_t size_min,
+                  std::size_t size_max);
+  void textList(const std::string& key, std::vector<std::string>& value);
+
+  // Throws for keys present but never read.
+  void finish() const;
+
+  [[noreturn]] void fail(const std::string& key, const std::string& value,
+                         const std::string& expected) const;
+  std::string keyPath(const std::string& key) const;
+  const std::string& source() const { return source_; }
+
+ private:
+  YAML::Node node_;
+  std::string path_;
+  std::string source_;
+  std::set<std::string> read_;
+};
+
+// Scalar text of a node for messages ("[list]" / "{map}" for containers).
+std::string yamlValueText(const YAML::Node& node);
+
+}  // namespace pc_ekf

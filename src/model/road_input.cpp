@@ -1,0 +1,142 @@
+#include "model/road_input.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace pc_ekf {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586476925286766559;
+
+// Times of the four corners of one trapezoid that starts at travel `start` (SPEC §1.5).
+void addCorners(const SpeedBumpSettings& s, double start, double t0, double t1,
+                std::vector<double>& out) {
+  const double v = s.speed_kmh / 3.6;
+  const double at[4] = {start, start + s.ramp_up_length, start + s.ramp_up_length + s.flat_length,
+                        start + s.ramp_up_length + s.flat_length + s.ramp_down_length};
+  for (double d : at) {
+    const double t = d / v;
+    if (t > t0 && t < t1) out.push_back(t);
+  }
+}
+
+std::string describeTime(const char* what, double t) {
+  std::ostringstream os;
+  os.precision(17);
+  os << "SampledRoad: " << what << " at t = " << t;
+  return os.str();
+}
+
+}  // namespace
+
+SpeedBumpRoad::SpeedBumpRoad(const SpeedBumpSettings& s) : s_(s) {
+  const double values[] = {s.speed_kmh,   s.height_left,      s.height_right,   s.ramp_up_length,
+                           s.flat_length, s.ramp_down_length, s.delay_fraction, s.start_distance};
+  for (double v : values) {
+    if (!std::isfinite(v)) throw std::invalid_argument("SpeedBumpRoad: non-finite setting");
+  }
+  if (s.speed_kmh <= 0.0) throw std::invalid_argument("SpeedBumpRoad: speed_kmh must be > 0");
+  if (s.ramp_up_length < 0.0 || s.flat_length < 0.0 || s.ramp_down_length < 0.0 ||
+      s.delay_fraction < 0.0) {
+    throw std::invalid_argument("SpeedBumpRoad: lengths and delay_fraction must be >= 0");
+  }
+}
+
+Eigen::Vector2d SpeedBumpRoad::height(double t) const {
+  const double travel = s_.speed_kmh / 3.6 * t - s_.start_distance;
+  const double up = s_.ramp_up_length;
+  const double top = up + s_.flat_length;
+  const double total = top + s_.ramp_down_length;
+  // Unit-height trapezoid at travel d past the bump's start; zero-length ramps are steps.
+  const auto shape = [&](double d) {
+    if (d <= 0.0 || d >= total) return 0.0;
+    if (d < up) return d / up;
+    if (d <= top) return 1.0;
+    return (total - d) / s_.ramp_down_length;
+  };
+  return {s_.height_left * shape(travel),
+          s_.height_right * shape(travel - s_.delay_fraction * total)};
+}
+
+std::vector<double> SpeedBumpRoad::breakpoints(double t0, double t1) const {
+  const double total = s_.ramp_up_length + s_.flat_length + s_.ramp_down_length;
+  std::vector<double> out;
+  addCorners(s_, s_.start_distance, t0, t1, out);
+  addCorners(s_, s_.start_distance + s_.delay_fraction * total, t0, t1, out);
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
+SineRoad::SineRoad(const SineSettings& s) : s_(s) {
+  if (!std::isfinite(s.amplitude) || !std::isfinite(s.frequency) || !std::isfinite(s.right_sign)) {
+    throw std::invalid_argument("SineRoad: non-finite setting");
+  }
+}
+
+Eigen::Vector2d SineRoad::height(double t) const {
+  const double y1 = s_.amplitude * std::sin(kTwoPi * s_.frequency * t);
+  return {y1, s_.right_sign * y1};
+}
+
+SampledRoad::SampledRoad(std::vector<double> t, std::vector<double> left,
+                         std::vector<double> right) {
+  if (t.size() != left.size() || t.size() != right.size()) {
+    throw std::invalid_argument("SampledRoad: time and value series differ in length");
+  }
+  for (std::size_t i = 0; i < t.size(); ++i) append(t[i], left[i], right[i]);
+}
+
+void SampledRoad::append(double t, double left, double right) {
+  if (!std::isfinite(t)) throw std::invalid_argument(describeTime("non-finite time", t));
+  if (!t_.empty() && !(t > t_.back())) {
+    throw std::invalid_argument(describeTime("time not after the last sample", t));
+  }
+  if (!std::isfinite(left) || !std::isfinite(right)) {
+    throw std::invalid_argument(describeTime("non-finite height", t));
+  }
+  t_.push_back(t);
+  left_.push_back(left);
+  right_.push_back(right);
+}
+
+void SampledRoad::discardBefore(double t) {
+  // First sample strictly after t; keep the one before it (if any) for interpolation.
+  const auto after = std::upper_bound(t_.begin(), t_.end(), t);
+  if (after == t_.begin()) return;
+  const auto n = (after - t_.begin()) - 1;
+  t_.erase(t_.begin(), t_.begin() + n);
+  left_.erase(left_.begin(), left_.begin() + n);
+  right_.erase(right_.begin(), right_.begin() + n);
+}
+
+double SampledRoad::firstTime() const {
+  if (t_.empty()) throw std::logic_error("SampledRoad::firstTime on an empty road");
+  return t_.front();
+}
+
+double SampledRoad::lastTime() const {
+  if (t_.empty()) throw std::logic_error("SampledRoad::lastTime on an empty road");
+  return t_.back();
+}
+
+Eigen::Vector2d SampledRoad::height(double t) const {
+  if (t_.empty()) return Eigen::Vector2d::Zero();  // no input yet: road at rest
+  if (t <= t_.front()) return {left_.front(), right_.front()};
+  if (t >= t_.back()) return {left_.back(), right_.back()};
+  const std::size_t i = std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1;
+  const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
+  return {left_[i] + w * (left_[i + 1] - left_[i]), right_[i] + w * (right_[i + 1] - right_[i])};
+}
+
+std::vector<double> SampledRoad::breakpoints(double t0, double t1) const {
+  const auto first = std::upper_bound(t_.begin(), t_.end(), t0);
+  const auto last = std::lower_bound(t_.begin(), t_.end(), t1);
+  if (first >= last) return {};
+  return std::vector<double>(first, last);
+}
+
+}  // namespace pc_ekf

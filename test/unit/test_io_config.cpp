@@ -1,0 +1,131 @@
+// Configuration schema: the paper's files load with their values, and each
+// kind of bad input is refused with a message naming the key.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "io/estimator_config.h"
+
+namespace pc_ekf {
+namespace {
+
+const std::string kDir = std::string(PC_EKF_SOURCE_DIR) + "/config/";
+
+std::string errorOf(const std::string& yaml) {
+  try {
+    parseConfigString(yaml, "bad.yaml");
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const char* kMinimal =
+    "uncertain:\n"
+    "  - {name: added_mass, nominal: 200.0, relative_range: 0.5, germ: {family: beta, alpha: 2, "
+    "beta: 2}}\n"
+    "  - {name: added_mass_position, nominal: 0.762, relative_range: 0.25}\n";
+
+TEST(Config, SpeedBumpFileHoldsThePaperSettings) {
+  const EstimatorConfig c = loadConfigFile(kDir + "speed_bump.yaml");
+  EXPECT_DOUBLE_EQ(c.vehicle.bar_mass, 580.0);
+  EXPECT_DOUBLE_EQ(c.vehicle.tyre_stiffness[1], 96319.76);
+  EXPECT_DOUBLE_EQ(c.vehicle.spring_cubic[0], 1e5);
+  ASSERT_EQ(c.uncertain.size(), 2u);
+  EXPECT_EQ(c.uncertain[1].name, "added_mass_position");
+  EXPECT_DOUBLE_EQ(c.uncertain[1].relative_range, 0.25);
+  EXPECT_EQ(c.pc_order, 4);
+  EXPECT_EQ(c.collocation.points, 30);
+  EXPECT_EQ(c.road.source, RoadSource::kSpeedBump);
+  EXPECT_EQ(c.sampling.samples, 10);
+  EXPECT_DOUBLE_EQ(c.sampling.interval(), 0.3);
+  EXPECT_EQ(c.update, UpdateRule::kSquareRoot);
+  const Eigen::VectorXd truth =
+      c.parameterValues(Eigen::Map<const Eigen::VectorXd>(c.truth.xi.data(), 2));
+  EXPECT_NEAR(truth[0], 223.26, 1e-9);
+  EXPECT_NEAR(truth[1], 0.762 * (1 - 0.25 * 0.3875), 1e-12);
+}
+
+TEST(Config, SineFilesSelectTheSineRoadAndTheLinearVariant) {
+  const EstimatorConfig sine = loadConfigFile(kDir + "sine_1hz.yaml");
+  EXPECT_EQ(sine.road.source, RoadSource::kSine);
+  EXPECT_DOUBLE_EQ(sine.road.sine.amplitude, 0.05);
+  EXPECT_EQ(sine.vehicle.damper, DamperLaw::kTanh);
+  const EstimatorConfig linear = loadConfigFile(kDir + "sine_1hz_linear.yaml");
+  EXPECT_EQ(linear.vehicle.damper, DamperLaw::kLinear);
+  EXPECT_DOUBLE_EQ(linear.vehicle.spring_cubic[0], 0.0);
+  EXPECT_DOUBLE_EQ(linear.vehicle.spring_cubic[1], 0.0);
+}
+
+TEST(Config, MinimalFileTakesDefaults) {
+  const EstimatorConfig c = parseConfigString(kMinimal, "min.yaml");
+  EXPECT_EQ(c.uncertain[1].germ.family, GermFamily::kBeta);
+  EXPECT_EQ(c.truth.xi.size(), 2u);
+  EXPECT_EQ(c.measurement.channels.size(), 4u);
+  EXPECT_DOUBLE_EQ(c.measurement.r_floor, 1e-12);
+}
+
+TEST(Config, NegativeMassIsRefusedNamingTheKey) {
+  const std::string e = errorOf(std::string("vehicle: {bar_mass: -5}\n") + kMinimal);
+  EXPECT_NE(e.find("bad.yaml"), std::string::npos) << e;
+  EXPECT_NE(e.find("vehicle.bar_mass"), std::string::npos) << e;
+  EXPECT_NE(e.find("-5"), std::string::npos) << e;
+  EXPECT_NE(e.find("positive"), std::string::npos) << e;
+  const std::string added = errorOf(std::string("vehicle: {added_mass: -1}\n") + kMinimal);
+  EXPECT_NE(added.find("vehicle.added_mass"), std::string::npos) << added;
+}
+
+TEST(Config, UnknownKeyIsRefusedNamingTheKey) {
+  const std::string e = errorOf(std::string("vehicle: {bar_mas: 580}\n") + kMinimal);
+  EXPECT_NE(e.find("vehicle.bar_mas"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key"), std::string::npos) << e;
+  const std::string top = errorOf(std::string("sampeling: {samples: 3}\n") + kMinimal);
+  EXPECT_NE(top.find("'sampeling'"), std::string::npos) << top;
+}
+
+TEST(Config, WrongSizeListIsRefusedNamingTheKey) {
+  const std::string e = errorOf(std::string("truth: {xi: [0.1, 0.2, 0.3]}\n") + kMinimal);
+  EXPECT_NE(e.find("truth.xi"), std::string::npos) << e;
+  EXPECT_NE(e.find("a list of 2 numbers"), std::string::npos) << e;
+  const std::string alphas =
+      errorOf(std::string("filter: {es_mda: {alphas: [2, 2, 2]}}\n") + kMinimal);
+  EXPECT_NE(alphas.find("filter.es_mda.alphas"), std::string::npos) << alphas;
+}
+
+TEST(Config, TooFewCollocationPointsAreRefusedNamingTheKey) {
+  const std::string e = errorOf(std::string("collocation: {points: 10}\n") + kMinimal);
+  EXPECT_NE(e.find("collocation.points"), std::string::npos) << e;
+  EXPECT_NE(e.find("S = 15"), std::string::npos) << e;
+  // Order 2 needs only 6 points.
+  EXPECT_NO_THROW(parseConfigString(std::string("pc: {order: 2}\ncollocation: {points: 6}\n") +
+                                        kMinimal, "ok.yaml"));
+}
+
+TEST(Config, BadValuesAreRefusedNamingTheKey) {
+  EXPECT_NE(errorOf(std::string("road: {source: gravel}\n") + kMinimal).find("road.source"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string("measurement: {channels: [u1, w3]}\n") + kMinimal)
+                .find("measurement.channels"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string("sampling: {samples: 2.5}\n") + kMinimal).find("sampling.samples"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string("truth: {xi: [1.5, 0]}\n") + kMinimal).find("truth.xi[0]"),
+            std::string::npos);
+  EXPECT_NE(errorOf("uncertain:\n  - {name: wheel_radius, relative_range: 0.1}\n")
+                .find("uncertain[0].name"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string("vehicle: {added_mass_position: 2.0}\n") + kMinimal)
+                .find("vehicle.added_mass_position"),
+            std::string::npos);
+  const std::string yaml = errorOf("vehicle: {bar_mass: [1,\n");
+  EXPECT_NE(yaml.find("line"), std::string::npos) << yaml;
+}
+
+}  // namespace
+}  // namespace pc_ekf
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
