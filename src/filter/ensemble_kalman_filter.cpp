@@ -1,8 +1,10 @@
 #include "filter/ensemble_kalman_filter.h"
 
+#include <cmath>
 #include <stdexcept>
 #include <thread>
 
+#include "filter/kalman_update.h"
 #include "filter/one_step_filter.h"
 #include "pc/polynomial_basis.h"
 #include "pc/pc_statistics.h"
@@ -87,17 +89,33 @@ EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
     const Eigen::VectorXd xm = x.rowwise().mean(), zm = hx.rowwise().mean();
     const Eigen::MatrixXd a = x.colwise() - xm, y = hx.colwise() - zm;
     const Eigen::VectorXd r = settings_.noise.variances(m.values);
-    const Eigen::MatrixXd pzz = y * y.transpose() / double(ne - 1) + Eigen::MatrixXd(r.asDiagonal());
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(pzz);
-    const Eigen::MatrixXd gain = ldlt.solve(y * a.transpose() / double(ne - 1)).transpose();
-    s.innovation = m.values - zm;
-    s.nis = s.innovation.dot(ldlt.solve(s.innovation));
-    std::normal_distribution<double> normal;
-    const Eigen::VectorXd sd = r.cwiseSqrt();
+    const double scale = std::sqrt(double(ne - 1));
+    if (settings_.square_root) {
+      // Mean and scaled anomalies play the role of PC coefficients.
+      Eigen::MatrixXd w(ns + np, ne + 1);
+      w << xm, a / scale;
+      Eigen::MatrixXd wz(k, ne + 1);
+      wz << zm, y / scale;
+      const UpdateDiagnostics d = pcKalmanUpdate(w, wz, m.values, r, UpdateRule::kSquareRoot);
+      s.innovation = d.innovation;
+      s.nis = d.nis;
+      x = (w.rightCols(ne) * scale).colwise() + w.col(0);
+    } else {
+      const Eigen::MatrixXd pzz =
+          y * y.transpose() / double(ne - 1) + Eigen::MatrixXd(r.asDiagonal());
+      const Eigen::LDLT<Eigen::MatrixXd> ldlt(pzz);
+      const Eigen::MatrixXd gain = ldlt.solve(y * a.transpose() / double(ne - 1)).transpose();
+      s.innovation = m.values - zm;
+      s.nis = s.innovation.dot(ldlt.solve(s.innovation));
+      std::normal_distribution<double> normal;
+      const Eigen::VectorXd sd = r.cwiseSqrt();
+      for (Eigen::Index i = 0; i < ne; ++i) {
+        Eigen::VectorXd perturbed = m.values;
+        for (Eigen::Index c = 0; c < k; ++c) perturbed[c] += sd[c] * normal(rng_);
+        x.col(i) += gain * (perturbed - hx.col(i));
+      }
+    }
     for (Eigen::Index i = 0; i < ne; ++i) {
-      Eigen::VectorXd perturbed = m.values;
-      for (Eigen::Index c = 0; c < k; ++c) perturbed[c] += sd[c] * normal(rng_);
-      x.col(i) += gain * (perturbed - hx.col(i));
       states_.col(cols[i]) = x.col(i).head(ns).array();
       theta_.col(cols[i]) = x.col(i).tail(np);
     }

@@ -20,6 +20,10 @@ struct EnkfSettings {
   NoiseModel noise;
   IntegratorSettings integration;
   int threads = 2;
+  // false: perturbed observations (SPEC §3.5, the baseline). true: the serial
+  // square-root rule of SPEC §3.3 on the ensemble (an EAKF), which isolates
+  // the effect of observation perturbations when comparing with the PC-EKF.
+  bool square_root = false;
 };
 
 struct EnkfStep {

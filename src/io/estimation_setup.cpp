@@ -63,6 +63,7 @@ EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
   s.noise = makeNoiseModel(c);
   s.integration = c.integration;
   s.threads = c.grid.threads;
+  s.square_root = c.enkf.square_root;
   return s;
 }
 

@@ -158,6 +158,12 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   YamlMapReader k = f.map("enkf");
   k.integer("members", c.enkf.members, 2, 10000000);
   k.unsignedInteger("seed", c.enkf.seed);
+  std::string enkf_update = c.enkf.square_root ? "square_root" : "perturbed";
+  k.text("update", enkf_update);
+  if (enkf_update != "perturbed" && enkf_update != "square_root") {
+    k.fail("update", "'" + enkf_update + "'", "perturbed or square_root");
+  }
+  c.enkf.square_root = enkf_update == "square_root";
   k.finish();
   YamlMapReader g = f.map("grid");
   g.integer("coarse_points", c.grid.coarse_points, 3, 100001);

@@ -74,6 +74,7 @@ struct EsMdaConfig {
 struct EnkfConfig {
   int members = 200;
   std::uint64_t seed = 7;
+  bool square_root = false;  // update: perturbed (baseline) | square_root (EAKF)
 };
 
 struct GridConfig {

@@ -1,0 +1,118 @@
+// The paper's speed-bump cases (SPEC §4) judged against the exact posterior
+// (SPEC §3.5) and over many noise seeds. Seeds are fixed, not selected.
+#include <gtest/gtest.h>
+
+#include "filter/reference_posterior.h"
+#include "io/estimation_setup.h"
+#include "io/offline_estimation.h"
+
+namespace pc_ekf {
+namespace {
+
+const std::string kConfig = std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml";
+
+struct CaseData {
+  EstimatorConfig config;
+  std::shared_ptr<const RollPlaneModel> model;
+  MeasurementSeries data;
+};
+
+CaseData makeRun(int samples, std::uint64_t seed) {
+  CaseData r;
+  r.config = loadConfigFile(kConfig);
+  r.config.sampling.samples = samples;
+  r.model = makeModel(r.config, makeRoad(r.config));
+  r.data = synthesizeFromConfig(r.config, *r.model, seed);
+  return r;
+}
+
+OfflineResult estimate(const CaseData& r, EstimationMethod m, UpdateRule rule, std::uint64_t seed = 1) {
+  EstimatorConfig c = r.config;
+  c.update = rule;
+  return runOfflineEstimation(c, r.data, r.model, m, seed);
+}
+
+TEST(PaperCaseA, SquareRootOneStepAndEsMdaAgainstTheReferencePosterior) {
+  const CaseData run = makeRun(10, 1);
+  const OfflineResult grid = estimate(run, EstimationMethod::kGrid, UpdateRule::kSquareRoot);
+  ASSERT_EQ(grid.modes, 1);
+  EXPECT_LT(grid.border_mass, 1e-6);
+  const OfflineResult one = estimate(run, EstimationMethod::kOneStep, UpdateRule::kSquareRoot);
+  const OfflineResult esmda = estimate(run, EstimationMethod::kEsMda, UpdateRule::kSquareRoot);
+  for (int i = 0; i < 2; ++i) {
+    const double post_mean = grid.parameters[i].mean, post_std = grid.parameters[i].stddev;
+    const ParameterSummary& o = one.parameters[i];
+    EXPECT_LT(std::abs(o.mean - post_mean), 2.0 * o.stddev) << o.name;
+    EXPECT_GT(o.stddev, 0.7 * post_std) << o.name;
+    EXPECT_LT(o.stddev, 10.0 * post_std) << o.name;
+    const ParameterSummary& e = esmda.parameters[i];
+    EXPECT_LT(std::abs(e.mean - post_mean), 1.5 * post_std) << e.name;
+    EXPECT_GT(e.stddev, 0.7 * post_std) << e.name;
+    EXPECT_LT(e.stddev, 2.0 * post_std) << e.name;
+    RecordProperty(o.name + "_posterior", std::to_string(post_mean) + " +- " + std::to_string(post_std));
+  }
+}
+
+// Both approximate the same linear-update estimator (SPEC §3.5 note). The
+// square-root ensemble (same serial rule as the PC-EKF) isolates what the
+// observation perturbations add: measured on this case, the perturbed EnKF's
+// d_CG sits 0.27-0.33 of its std from the PC-EKF for every ensemble seed
+// (spread 0.02 std), the square-root ensemble within 0.1.
+TEST(PaperCaseA, LargeEnkfApproximatesTheSameLinearUpdateEstimator) {
+  CaseData run = makeRun(10, 1);
+  run.config.enkf.members = 2000;
+  const OfflineResult pc = estimate(run, EstimationMethod::kOneStep, UpdateRule::kSquareRoot);
+  const OfflineResult enkf = estimate(run, EstimationMethod::kEnkf, UpdateRule::kSquareRoot);
+  run.config.enkf.square_root = true;
+  const OfflineResult eakf = estimate(run, EstimationMethod::kEnkf, UpdateRule::kSquareRoot);
+  for (int i = 0; i < 2; ++i) {
+    const ParameterSummary& e = enkf.parameters[i];
+    const ParameterSummary& s = eakf.parameters[i];
+    EXPECT_LT(std::abs(s.mean - pc.parameters[i].mean), 0.3 * s.stddev) << s.name;
+    EXPECT_LT(std::abs(e.mean - pc.parameters[i].mean), 0.4 * e.stddev) << e.name;
+    EXPECT_NEAR(e.stddev / pc.parameters[i].stddev, 1.0, 0.15) << e.name;
+    EXPECT_NEAR(s.stddev / pc.parameters[i].stddev, 1.0, 0.15) << s.name;
+    std::printf("%s: pc %.6g +- %.3g, enkf %.6g +- %.3g (%.2f std), eakf %.6g +- %.3g (%.2f std)\n",
+                e.name.c_str(), pc.parameters[i].mean, pc.parameters[i].stddev, e.mean, e.stddev,
+                std::abs(e.mean - pc.parameters[i].mean) / e.stddev, s.mean, s.stddev,
+                std::abs(s.mean - pc.parameters[i].mean) / s.stddev);
+  }
+}
+
+TEST(PaperCaseB, SquareRootCoversTheTruthAndStaysCoherentWhereThePaperRuleDoesNot) {
+  const int seeds = 30;
+  const EstimatorConfig base = loadConfigFile(kConfig);
+  const Eigen::VectorXd truth = base.parameterValues(
+      Eigen::Map<const Eigen::VectorXd>(base.truth.xi.data(), base.truth.xi.size()));
+  int covered[2][2] = {{0, 0}, {0, 0}};  // [rule][parameter]
+  int flagged[2] = {0, 0};
+  const UpdateRule rules[2] = {UpdateRule::kSquareRoot, UpdateRule::kPaper};
+  for (int s = 1; s <= seeds; ++s) {
+    const CaseData run = makeRun(100, s);
+    for (int u = 0; u < 2; ++u) {
+      const OfflineResult r = estimate(run, EstimationMethod::kOneStep, rules[u]);
+      ASSERT_TRUE(r.coherence.available);
+      for (int i = 0; i < 2; ++i) {
+        covered[u][i] += std::abs(r.parameters[i].mean - truth[i]) <= 2.0 * r.parameters[i].stddev;
+      }
+      flagged[u] += r.coherence.flagged;
+    }
+  }
+  const double sqrt_m = covered[0][0] / double(seeds), sqrt_d = covered[0][1] / double(seeds);
+  const double paper_m = covered[1][0] / double(seeds), paper_d = covered[1][1] / double(seeds);
+  EXPECT_GE(sqrt_m, 0.6);
+  EXPECT_GE(sqrt_d, 0.6);
+  EXPECT_GT(covered[0][0] + covered[0][1], covered[1][0] + covered[1][1]);
+  EXPECT_GE(flagged[1], 0.2 * seeds);
+  EXPECT_LE(flagged[0], 0.05 * seeds);
+  std::printf("case B coverage: square_root %.2f/%.2f, paper %.2f/%.2f; coherence flags %d vs %d of %d\n",
+              sqrt_m, sqrt_d, paper_m, paper_d, flagged[0], flagged[1], seeds);
+}
+
+}  // namespace
+}  // namespace pc_ekf
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
