@@ -80,9 +80,9 @@ CoarseGridCache::CoarseGridCache(const MechanicalModel& model, const ParameterMa
       max_step_(integration.max_step),
       grid_(PriorDensity(mapping.germs()), coarse_points) {
   const Eigen::Index channels = model.observationMatrix().rows();
-  channels_.assign(times_.size(),
-                   Eigen::MatrixXd::Constant(channels, grid_.size(),
-                                             std::numeric_limits<double>::quiet_NaN()));
+  channels_.assign(
+      times_.size(),
+      Eigen::MatrixXd::Constant(channels, grid_.size(), std::numeric_limits<double>::quiet_NaN()));
   std::vector<Eigen::Index> live;
   for (Eigen::Index j = 0; j < grid_.size(); ++j) {
     if (std::isfinite(grid_.logPrior()[j])) live.push_back(j);
@@ -135,7 +135,8 @@ void CoarseGridCache::checkCompatible(const ParameterMapping& mapping,
 Eigen::VectorXd CoarseGridCache::logLikelihood(const MeasurementSeries& series,
                                                const NoiseModel& noise) const {
   if (sampleTimes(series) != times_) {
-    throw std::invalid_argument("CoarseGridCache: the series' sample times differ from the cache's");
+    throw std::invalid_argument(
+        "CoarseGridCache: the series' sample times differ from the cache's");
   }
   return pc_ekf::logLikelihood(whitenedResiduals(series, noise, channels_));
 }

@@ -148,14 +148,16 @@ void posteriorMoments(const std::vector<FineGridIntegral>& grids, Eigen::VectorX
   double total = 0.0;
   mean = Eigen::VectorXd::Zero(n);
   for (const auto& g : grids) {
-    const Eigen::VectorXd m = g.weights.cwiseProduct((g.log_density.array() - reference).exp().matrix());
+    const Eigen::VectorXd m =
+        g.weights.cwiseProduct((g.log_density.array() - reference).exp().matrix());
     total += m.sum();
     mean += g.nodes * m;
   }
   mean /= total;
   covariance = Eigen::MatrixXd::Zero(n, n);
   for (const auto& g : grids) {
-    const Eigen::VectorXd m = g.weights.cwiseProduct((g.log_density.array() - reference).exp().matrix());
+    const Eigen::VectorXd m =
+        g.weights.cwiseProduct((g.log_density.array() - reference).exp().matrix());
     const Eigen::MatrixXd centred = g.nodes.colwise() - mean;
     covariance += centred * m.asDiagonal() * centred.transpose();
   }

@@ -21,6 +21,8 @@ struct Linearisation {
 
 struct Search {
   Linearisation at;
+  Eigen::MatrixXd hessian;  // Gauss-Newton, at `at`
+  int duplicate_of = -1;
   double lambda = 1e-3;
   bool active = true;
   bool converged = false;
@@ -82,6 +84,27 @@ Eigen::MatrixXd gaussNewtonHessian(const PriorDensity& prior, const Linearisatio
   return h;
 }
 
+// Many coarse maxima lie in one basin (a narrow ridge sampled by a coarse
+// grid): a search within merge_distance Gauss-Newton std of a better one
+// would only converge to the same mode, so it stops there.
+void mergeDuplicates(std::vector<Search>& searches, double merge_distance) {
+  for (std::size_t s = 0; s < searches.size(); ++s) {
+    if (!searches[s].active) continue;
+    for (std::size_t t = 0; t < searches.size(); ++t) {
+      const Search& other = searches[t];
+      const bool better =
+          other.at.f < searches[s].at.f || (other.at.f == searches[s].at.f && t < s);
+      if (t == s || other.duplicate_of >= 0 || !better) continue;
+      const Eigen::VectorXd d = searches[s].at.x - other.at.x;
+      if (d.dot(other.hessian * d) < merge_distance * merge_distance) {
+        searches[s].active = false;
+        searches[s].duplicate_of = static_cast<int>(t);
+        break;
+      }
+    }
+  }
+}
+
 }  // namespace
 
 std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual,
@@ -96,10 +119,12 @@ std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual
     const auto initial = linearise(residual, prior, starts, settings.difference_step);
     for (std::size_t s = 0; s < starts.size(); ++s) {
       searches[s].at = initial[s];
+      searches[s].hessian = gaussNewtonHessian(prior, initial[s], nullptr);
       if (!std::isfinite(initial[s].f)) {
         throw std::invalid_argument("refineModes: a start has zero posterior density");
       }
     }
+    mergeDuplicates(searches, settings.merge_distance);
   }
   for (int iteration = 0; iteration < settings.max_iterations; ++iteration) {
     std::vector<std::size_t> trying;
@@ -129,6 +154,7 @@ std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual
       const double f_old = search.at.f;
       if (trial[t].f < f_old) {
         search.at = trial[t];
+        search.hessian = gaussNewtonHessian(prior, search.at, nullptr);
         search.lambda = std::max(search.lambda / 3.0, 1e-12);
         if (f_old - trial[t].f <= settings.relative_decrease * (1.0 + std::abs(trial[t].f))) {
           search.converged = true;
@@ -143,6 +169,7 @@ std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual
         }
       }
     }
+    mergeDuplicates(searches, settings.merge_distance);
   }
   std::vector<PosteriorModeEstimate> out;
   for (const Search& search : searches) {
@@ -152,6 +179,7 @@ std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual
     m.hessian = gaussNewtonHessian(prior, search.at, nullptr);
     m.iterations = search.iterations;
     m.converged = search.converged;
+    m.duplicate_of = search.duplicate_of;
     out.push_back(m);
   }
   return out;

@@ -20,6 +20,9 @@ struct ModeSearchSettings {
   double difference_step = 1e-7;
   // Converged when an accepted step lowers F by less than this * (1 + |F|).
   double relative_decrease = 1e-12;
+  // A search within this many Gauss-Newton std of a better one stops as its
+  // duplicate (same basin); distinct modes closer than this share a fine grid.
+  double merge_distance = 3.0;
 };
 
 struct PosteriorModeEstimate {
@@ -29,6 +32,7 @@ struct PosteriorModeEstimate {
   Eigen::MatrixXd hessian;
   int iterations = 0;
   bool converged = false;
+  int duplicate_of = -1;  // index of the start it merged into, or -1
 };
 
 // One estimate per start (same order); starts must have finite log posterior.

@@ -88,9 +88,9 @@ ModelPosteriorResidual::ModelPosteriorResidual(const MechanicalModel& model,
   if (series_.empty()) throw std::invalid_argument("ModelPosteriorResidual: empty series");
   for (const Measurement& m : series_) {
     if (!m.values.allFinite() || m.values.size() != static_cast<Eigen::Index>(m.channels.size())) {
-      throw std::invalid_argument("ModelPosteriorResidual: sample at t = " +
-                                  std::to_string(m.time) +
-                                  " has non-finite values or mismatched channels");
+      throw std::invalid_argument(
+          "ModelPosteriorResidual: sample at t = " + std::to_string(m.time) +
+          " has non-finite values or mismatched channels");
     }
   }
 }

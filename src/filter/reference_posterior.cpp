@@ -117,8 +117,9 @@ ReferencePosterior computeReferencePosterior(const PosteriorResidual& residual,
   Eigen::Index best = 0;
   out.coarse_best_log_density = coarse.maxCoeff(&best);
   if (!std::isfinite(out.coarse_best_log_density)) {
-    throw std::runtime_error("computeReferencePosterior: zero posterior density on every node "
-                             "of the coarse grid");
+    throw std::runtime_error(
+        "computeReferencePosterior: zero posterior density on every node "
+        "of the coarse grid");
   }
   out.coarse_best_xi = grid.nodes().col(best);
   out.coarse_seconds = secondsSince(start);
@@ -156,6 +157,7 @@ ReferencePosterior computeReferencePosterior(const PosteriorResidual& residual,
   std::vector<const PosteriorModeEstimate*> kept;
   for (const auto& e : estimates) {
     if (e.log_density < estimates.front().log_density - settings.mode_log_margin) break;
+    if (e.duplicate_of >= 0) continue;
     bool seen = false;
     for (const auto& b : boxes) seen = seen || b.contains(e.xi);
     if (seen) continue;
@@ -168,6 +170,9 @@ ReferencePosterior computeReferencePosterior(const PosteriorResidual& residual,
   // (4) Combine: masses relative to a common reference (log-sum-exp).
   double reference = -kInf;
   for (const auto& g : grids) reference = std::max(reference, g.log_mass);
+  if (!std::isfinite(reference)) {
+    throw std::runtime_error("computeReferencePosterior: no mass on any fine grid");
+  }
   double total = 0.0, border = 0.0;
   for (const auto& g : grids) {
     const double m = std::isfinite(g.log_mass) ? std::exp(g.log_mass - reference) : 0.0;
@@ -204,14 +209,11 @@ ReferencePosterior computeReferencePosterior(const PosteriorResidual& residual,
   return out;
 }
 
-ReferencePosterior computeReferencePosterior(const MechanicalModel& model,
-                                             const ParameterMapping& mapping,
-                                             const MeasurementSeries& series,
-                                             const NoiseModel& noise,
-                                             const IntegratorSettings& integration,
-                                             const ReferencePosteriorSettings& settings,
-                                             const CoarseGridCache* cache,
-                                             const PosteriorProgress& progress) {
+ReferencePosterior computeReferencePosterior(
+    const MechanicalModel& model, const ParameterMapping& mapping, const MeasurementSeries& series,
+    const NoiseModel& noise, const IntegratorSettings& integration,
+    const ReferencePosteriorSettings& settings, const CoarseGridCache* cache,
+    const PosteriorProgress& progress) {
   const ModelPosteriorResidual residual(model, mapping, series, noise, integration,
                                         settings.threads);
   Eigen::VectorXd cached;

@@ -33,17 +33,17 @@ struct ReferencePosteriorSettings {
   // coarse values first), and how far below the best refined peak a mode may
   // lie (log density) and still get a fine grid. The margin is applied after
   // refinement: with std ~1e-4 the coarse values say little about the peaks.
-  int max_candidates = 16;
+  int max_candidates = 64;
   double mode_log_margin = 50.0;
   ModeSearchSettings mode_search;
 };
 
 struct ReferencePosteriorMode {
-  Eigen::VectorXd xi;          // maximiser
-  Eigen::VectorXd parameters;  // maximiser in parameter units
-  double log_density = 0.0;    // unnormalised log posterior at xi
-  double mass_fraction = 0.0;  // of the total posterior mass
-  double border_fraction = 0.0;  // border mass / this mode's mass
+  Eigen::VectorXd xi;                // maximiser
+  Eigen::VectorXd parameters;        // maximiser in parameter units
+  double log_density = 0.0;          // unnormalised log posterior at xi
+  double mass_fraction = 0.0;        // of the total posterior mass
+  double border_fraction = 0.0;      // border mass / this mode's mass
   Eigen::VectorXd principal_stddev;  // Gauss-Newton std along the grid's axes
   int enlargements = 0;
   bool converged = false;  // Levenberg-Marquardt
@@ -56,12 +56,12 @@ struct ReferencePosterior {
   // units when computed without a ParameterMapping.
   std::vector<std::string> names;
   Eigen::VectorXd mean, stddev;
-  std::vector<Histogram> marginals;  // one per parameter, unit area
+  std::vector<Histogram> marginals;           // one per parameter, unit area
   std::vector<ReferencePosteriorMode> modes;  // heaviest first
 
-  double border_mass = 0.0;  // total border mass / total mass
-  double log_mass = 0.0;     // log of the integral of prior x exp(-1/2 |r|^2)
-  long simulations = 0;      // forward-model runs of this call
+  double border_mass = 0.0;     // total border mass / total mass
+  double log_mass = 0.0;        // log of the integral of prior x exp(-1/2 |r|^2)
+  long simulations = 0;         // forward-model runs of this call
   long cached_simulations = 0;  // coarse-grid runs taken from a cache instead
   Eigen::Index coarse_grid_size = 0;
   double coarse_best_log_density = 0.0;
@@ -84,13 +84,10 @@ ReferencePosterior computeReferencePosterior(const PosteriorResidual& residual,
 // The model's posterior given a measurement series; `cache` (built for the
 // same mapping, sample times, integration step and coarse_points) skips the
 // coarse simulations. Results also in parameter units via the mapping.
-ReferencePosterior computeReferencePosterior(const MechanicalModel& model,
-                                             const ParameterMapping& mapping,
-                                             const MeasurementSeries& series,
-                                             const NoiseModel& noise,
-                                             const IntegratorSettings& integration,
-                                             const ReferencePosteriorSettings& settings,
-                                             const CoarseGridCache* cache = nullptr,
-                                             const PosteriorProgress& progress = {});
+ReferencePosterior computeReferencePosterior(
+    const MechanicalModel& model, const ParameterMapping& mapping, const MeasurementSeries& series,
+    const NoiseModel& noise, const IntegratorSettings& integration,
+    const ReferencePosteriorSettings& settings, const CoarseGridCache* cache = nullptr,
+    const PosteriorProgress& progress = {});
 
 }  // namespace pc_ekf
