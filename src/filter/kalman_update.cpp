@@ -15,14 +15,19 @@ UpdateRule updateRuleFromString(const std::string& s) {
 
 namespace {
 
-void checkShapes(const Eigen::MatrixXd& x, const Eigen::MatrixXd& zc, const Eigen::VectorXd& z,
-                 const Eigen::VectorXd& r) {
+// Checks sizes (throws) and finiteness; fills the innovation and channel count.
+UpdateDiagnostics prepare(const Eigen::MatrixXd& x, const Eigen::MatrixXd& zc,
+                          const Eigen::VectorXd& z, const Eigen::VectorXd& r) {
   if (zc.cols() != x.cols() || zc.rows() != z.size() || r.size() != z.size() || x.cols() < 1) {
     throw std::invalid_argument("pcKalmanUpdate: inconsistent sizes");
   }
+  UpdateDiagnostics d;
+  d.channels = static_cast<int>(z.size());
+  d.innovation = z - zc.col(0);
+  d.finite = x.allFinite() && zc.allFinite() && z.allFinite() && r.allFinite() &&
+             (r.array() > 0.0).all();
+  return d;
 }
-
-bool allFinite(const Eigen::MatrixXd& m) { return m.allFinite(); }
 
 // NIS by Woodbury: v^T (Y Y^T + R)^-1 v = v^T R^-1 v - b^T (I + Y^T R^-1 Y)^-1 b, b = Y^T R^-1 v.
 double woodburyNis(const Eigen::MatrixXd& y, const Eigen::VectorXd& rinv, const Eigen::VectorXd& v,
@@ -37,17 +42,9 @@ double woodburyNis(const Eigen::MatrixXd& y, const Eigen::VectorXd& rinv, const 
 UpdateDiagnostics pcKalmanUpdate(Eigen::MatrixXd& x, const Eigen::MatrixXd& z_coeffs,
                                  const Eigen::VectorXd& z, const Eigen::VectorXd& r,
                                  UpdateRule rule) {
-  checkShapes(x, z_coeffs, z, r);
-  UpdateDiagnostics d;
+  UpdateDiagnostics d = prepare(x, z_coeffs, z, r);
   const Eigen::Index k = z.size(), m = x.cols() - 1;
-  d.channels = static_cast<int>(k);
-  d.innovation = z - z_coeffs.col(0);
-  if (!allFinite(x) || !allFinite(z_coeffs) || !z.allFinite() || !r.allFinite() ||
-      (r.array() <= 0.0).any()) {
-    d.finite = false;
-    return d;
-  }
-  if (k == 0) return d;
+  if (!d.finite || k == 0) return d;
   const auto y = z_coeffs.rightCols(m);
   const Eigen::VectorXd rinv = r.cwiseInverse();
   // C = Y^T R^-1 Y, G = (I + C)^-1: the posterior covariance of the higher
@@ -90,12 +87,9 @@ UpdateDiagnostics pcKalmanUpdate(Eigen::MatrixXd& x, const Eigen::MatrixXd& z_co
 UpdateDiagnostics pcKalmanUpdateDense(Eigen::MatrixXd& x, const Eigen::MatrixXd& z_coeffs,
                                       const Eigen::VectorXd& z, const Eigen::VectorXd& r,
                                       UpdateRule rule) {
-  checkShapes(x, z_coeffs, z, r);
-  UpdateDiagnostics d;
+  UpdateDiagnostics d = prepare(x, z_coeffs, z, r);
   const Eigen::Index k = z.size(), m = x.cols() - 1;
-  d.channels = static_cast<int>(k);
-  d.innovation = z - z_coeffs.col(0);
-  if (k == 0) return d;
+  if (!d.finite || k == 0) return d;
   Eigen::MatrixXd xa = x, za = z_coeffs;
   if (rule == UpdateRule::kPaper) {
     const Eigen::MatrixXd a = xa.rightCols(m), y = za.rightCols(m);

@@ -94,6 +94,19 @@ Eigen::MatrixXd observationRows(const Measurement& m) {
   return h;
 }
 
+// Textbook predict + update of [y; theta].
+void kalmanStep(const Eigen::MatrixXd& phi, const Measurement& m, const NoiseModel& noise,
+                Gaussian* kf) {
+  kf->mean = phi * kf->mean;
+  kf->cov = phi * kf->cov * phi.transpose();
+  const Eigen::MatrixXd h = observationRows(m);
+  const Eigen::MatrixXd s =
+      h * kf->cov * h.transpose() + Eigen::MatrixXd(noise.variances(m.values).asDiagonal());
+  const Eigen::MatrixXd k = kf->cov * h.transpose() * s.inverse();
+  kf->mean += k * (m.values - h * kf->mean);
+  kf->cov = (Eigen::MatrixXd::Identity(4, 4) - k * h) * kf->cov;
+}
+
 double maxDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
   return (a - b).cwiseAbs().maxCoeff();
 }
@@ -107,14 +120,7 @@ TEST(LinearGaussian, SquareRootOneStepEqualsTheTextbookKalmanFilter) {
   OneStepFilter filter(p.propagator, settings);
   double worst_mean = 0.0, worst_cov = 0.0;
   for (const Measurement& m : p.data) {
-    kf.mean = phi * kf.mean;
-    kf.cov = phi * kf.cov * phi.transpose();
-    const Eigen::MatrixXd h = observationRows(m);
-    const Eigen::MatrixXd s = h * kf.cov * h.transpose() +
-                              Eigen::MatrixXd(p.noise.variances(m.values).asDiagonal());
-    const Eigen::MatrixXd k = kf.cov * h.transpose() * s.inverse();
-    kf.mean += k * (m.values - h * kf.mean);
-    kf.cov = (Eigen::MatrixXd::Identity(4, 4) - k * h) * kf.cov;
+    kalmanStep(phi, m, p.noise, &kf);
     filter.process(m);
     worst_mean = std::max(worst_mean, maxDiff(filter.state().col(0), kf.mean) / kf.mean.norm());
     worst_cov = std::max(worst_cov, maxDiff(pcCovariance(filter.state()), kf.cov) / kf.cov.norm());
@@ -160,14 +166,7 @@ Gaussian batchPosterior(const Problem& p) {
   const Eigen::MatrixXd phi = transitionMatrix(p);
   Gaussian kf = priorOf(p);
   for (const Measurement& m : p.data) {
-    kf.mean = phi * kf.mean;
-    kf.cov = phi * kf.cov * phi.transpose();
-    const Eigen::MatrixXd h = observationRows(m);
-    const Eigen::MatrixXd s = h * kf.cov * h.transpose() +
-                              Eigen::MatrixXd(p.noise.variances(m.values).asDiagonal());
-    const Eigen::MatrixXd k = kf.cov * h.transpose() * s.inverse();
-    kf.mean += k * (m.values - h * kf.mean);
-    kf.cov = (Eigen::MatrixXd::Identity(4, 4) - k * h) * kf.cov;
+    kalmanStep(phi, m, p.noise, &kf);
   }
   return {kf.mean.tail(2), kf.cov.bottomRightCorner(2, 2)};
 }
