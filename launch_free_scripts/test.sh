@@ -15,6 +15,7 @@ for arg in "$@"; do
 done
 
 pc_ekf_ensure_packages || { echo "0 passed, 1 failed"; exit 1; }
+mkdir -p "$PC_EKF_ROOT/.build"
 
 results="$PC_EKF_WS/build/test_results/pc_ekf"
 rm -rf "$results"

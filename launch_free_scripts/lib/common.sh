@@ -33,7 +33,7 @@ pc_ekf_ensure_packages() {
 
 # catkin workspace whose src/ links to the repository.
 pc_ekf_prepare_workspace() {
-  mkdir -p "$PC_EKF_WS/src"
+  mkdir -p "$PC_EKF_WS/src" "$PC_EKF_ROOT/.build"
   ln -sfn "$PC_EKF_ROOT" "$PC_EKF_WS/src/pc_ekf"
 }
 
