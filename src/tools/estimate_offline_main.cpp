@@ -5,6 +5,7 @@
 #include <map>
 #include <string>
 
+#include "io/bag_io.h"
 #include "io/estimation_setup.h"
 #include "io/measurement_csv.h"
 #include "io/offline_estimation.h"
@@ -57,13 +58,25 @@ int main(int argc, char** argv) {
       }
       seed = std::stoull(s);
     }
+    // A bag supplies the road (replacing the config's) and the samples.
+    std::shared_ptr<const RoadInput> bag_road;
+    MeasurementSeries series;
     if (args.count("--bag")) {
-      return badInput(args["--bag"] + ": bag input needs the ROS build of estimate_offline");
+      BagRecord bag = readBag(args["--bag"]);
+      for (std::size_t i = 0; i < bag.warnings.size() && i < 5; ++i) {
+        std::cerr << "[bag] " << args["--bag"] << ": " << bag.warnings[i] << "\n";
+      }
+      if (bag.warnings.size() > 5) {
+        std::cerr << "[bag] ... and " << bag.warnings.size() - 5 << " more warnings\n";
+      }
+      bag_road = std::make_shared<SampledRoad>(bag.road.t, bag.road.left, bag.road.right);
+      series = std::move(bag.samples);
     }
-    const auto model = makeModel(config, makeRoad(config));
-    const MeasurementSeries series = args.count("--measurements")
-                                         ? readMeasurementCsvFile(args["--measurements"])
-                                         : synthesizeFromConfig(config, *model, seed);
+    const auto model = makeModel(config, makeRoad(config, bag_road));
+    if (args.count("--measurements")) series = readMeasurementCsvFile(args["--measurements"]);
+    if (!args.count("--measurements") && !args.count("--bag")) {
+      series = synthesizeFromConfig(config, *model, seed);
+    }
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
     const OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
     std::cout << toJson(result) << std::flush;
@@ -72,6 +85,8 @@ int main(int argc, char** argv) {
   } catch (const ConfigError& e) {
     return badInput(e.what());
   } catch (const CsvError& e) {
+    return badInput(e.what());
+  } catch (const BagError& e) {
     return badInput(e.what());
   } catch (const std::invalid_argument& e) {
     return badInput(e.what());

@@ -1,0 +1,278 @@
+#include "io/bag_io.h"
+
+#include <ros/message_traits.h>
+#include <rosbag/bag.h>
+#include <rosbag/exceptions.h>
+#include <rosbag/view.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <filesystem>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+namespace pc_ekf {
+
+namespace {
+
+std::int64_t nanoseconds(const ros::Time& t) {
+  return static_cast<std::int64_t>(t.sec) * 1000000000LL + t.nsec;
+}
+
+std::string stampText(const ros::Time& t) {
+  std::ostringstream o;
+  o << t.sec << "." << std::setw(9) << std::setfill('0') << t.nsec;
+  return o.str();
+}
+
+std::string join(const std::vector<std::string>& items) {
+  std::string s;
+  for (const auto& i : items) s += (s.empty() ? "" : ", ") + i;
+  return s.empty() ? "none" : s;
+}
+
+// The one topic of the bag that matches `suffix` with type T, or "" when
+// none matches. Throws BagError when several match or the type differs.
+template <typename T>
+std::string findTopic(const std::string& path, rosbag::Bag& bag, const std::string& suffix,
+                      std::vector<std::string>* all_topics) {
+  rosbag::View everything(bag);
+  std::set<std::string> matches;
+  all_topics->clear();
+  const std::string expected = ros::message_traits::DataType<T>::value();
+  for (const rosbag::ConnectionInfo* c : everything.getConnections()) {
+    all_topics->push_back(c->topic + " (" + c->datatype + ")");
+    if (!topicMatches(c->topic, suffix)) continue;
+    if (c->datatype != expected) {
+      throw BagError(path + ": topic '" + c->topic + "' has type " + c->datatype + ", expected " +
+                     expected);
+    }
+    if (c->md5sum != "*" && c->md5sum != ros::message_traits::MD5Sum<T>::value()) {
+      throw BagError(path + ": topic '" + c->topic +
+                     "' was recorded with a different definition of " + expected + " (md5 " +
+                     c->md5sum + ")");
+    }
+    matches.insert(c->topic);
+  }
+  std::sort(all_topics->begin(), all_topics->end());
+  all_topics->erase(std::unique(all_topics->begin(), all_topics->end()), all_topics->end());
+  if (matches.size() > 1) {
+    throw BagError(path + ": several topics end in '" + suffix +
+                   "': " + join(std::vector<std::string>(matches.begin(), matches.end())));
+  }
+  return matches.empty() ? std::string() : *matches.begin();
+}
+
+template <typename T>
+std::vector<typename T::ConstPtr> readTopic(const std::string& path, rosbag::Bag& bag,
+                                            const std::string& topic) {
+  std::vector<typename T::ConstPtr> out;
+  if (topic.empty()) return out;
+  rosbag::View view(bag, rosbag::TopicQuery(topic));
+  for (const rosbag::MessageInstance& m : view) {
+    typename T::ConstPtr msg = m.instantiate<T>();
+    if (!msg) throw BagError(path + ": cannot decode a message on '" + topic + "'");
+    out.push_back(msg);
+  }
+  return out;
+}
+
+struct StampedSample {
+  std::int64_t ns = 0;
+  ros::Time stamp;
+  Measurement m;
+};
+
+// Samples with equal stamps observing disjoint channels become one sample.
+MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedSample>& raw) {
+  std::stable_sort(raw.begin(), raw.end(),
+                   [](const StampedSample& a, const StampedSample& b) { return a.ns < b.ns; });
+  MeasurementSeries out;
+  for (std::size_t i = 0; i < raw.size();) {
+    std::size_t j = i;
+    double values[4] = {0, 0, 0, 0};
+    bool seen[4] = {false, false, false, false};
+    for (; j < raw.size() && raw[j].ns == raw[i].ns; ++j) {
+      const Measurement& m = raw[j].m;
+      for (std::size_t k = 0; k < m.channels.size(); ++k) {
+        const int c = m.channels[k];
+        if (seen[c]) {
+          throw BagError(path + ": two suspension/joint_states messages stamped " +
+                         stampText(raw[i].stamp) + " both observe channel " + std::to_string(c) +
+                         " (u1, u2, v1, v2 = 0..3)");
+        }
+        seen[c] = true;
+        values[c] = m.values(static_cast<Eigen::Index>(k));
+      }
+    }
+    Measurement merged;
+    merged.time = raw[i].m.time;
+    std::vector<double> kept;
+    for (int c = 0; c < 4; ++c) {
+      if (!seen[c]) continue;
+      merged.channels.push_back(c);
+      kept.push_back(values[c]);
+    }
+    merged.values = Eigen::Map<const Eigen::VectorXd>(kept.data(), kept.size());
+    out.push_back(std::move(merged));
+    i = j;
+  }
+  return out;
+}
+
+}  // namespace
+
+bool topicMatches(const std::string& topic, const std::string& suffix) {
+  if (suffix.empty()) return false;
+  const std::string bare = suffix.front() == '/' ? suffix.substr(1) : suffix;
+  if (topic == bare || topic == "/" + bare) return true;
+  const std::string tail = "/" + bare;
+  return topic.size() > tail.size() &&
+         topic.compare(topic.size() - tail.size(), tail.size(), tail) == 0;
+}
+
+BagRecord readBag(const std::string& path, const BagReadOptions& options) {
+  BagRecord record;
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw BagError(path + ": no such bag file");
+  }
+  rosbag::Bag bag;
+  try {
+    bag.open(path, rosbag::bagmode::Read);
+  } catch (const std::exception& e) {
+    throw BagError(
+        path +
+        ": cannot open as a ROS bag (missing, unreadable, truncated or not a bag): " + e.what());
+  }
+
+  std::vector<RoadProfile::ConstPtr> road_msgs;
+  std::vector<sensor_msgs::JointState::ConstPtr> joint_msgs;
+  std::vector<ParameterEstimate::ConstPtr> truth_msgs;
+  std::vector<std::string> topics;
+  try {
+    record.road_topic = findTopic<RoadProfile>(path, bag, options.road_topic, &topics);
+    record.joint_states_topic =
+        findTopic<sensor_msgs::JointState>(path, bag, options.joint_states_topic, &topics);
+    const std::string truth_topic =
+        findTopic<ParameterEstimate>(path, bag, options.ground_truth_topic, &topics);
+    if (record.road_topic.empty()) {
+      throw BagError(path + ": no pc_ekf/RoadProfile messages on a topic ending in '" +
+                     options.road_topic +
+                     "' (the road defines t = 0); topics in the bag: " + join(topics));
+    }
+    if (record.joint_states_topic.empty()) {
+      throw BagError(path + ": no sensor_msgs/JointState messages on a topic ending in '" +
+                     options.joint_states_topic + "'; topics in the bag: " + join(topics));
+    }
+    road_msgs = readTopic<RoadProfile>(path, bag, record.road_topic);
+    joint_msgs = readTopic<sensor_msgs::JointState>(path, bag, record.joint_states_topic);
+    truth_msgs = readTopic<ParameterEstimate>(path, bag, truth_topic);
+  } catch (const BagError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw BagError(path + ": corrupt or truncated bag: " + e.what());
+  }
+  if (road_msgs.empty()) {
+    throw BagError(path + ": topic '" + record.road_topic + "' has no messages");
+  }
+  if (joint_msgs.empty()) {
+    throw BagError(path + ": topic '" + record.joint_states_topic +
+                   "' has no messages (no samples)");
+  }
+
+  // Road: by header stamp; the first stamp is the time origin.
+  std::stable_sort(road_msgs.begin(), road_msgs.end(),
+                   [](const RoadProfile::ConstPtr& a, const RoadProfile::ConstPtr& b) {
+                     return a->header.stamp < b->header.stamp;
+                   });
+  record.origin = road_msgs.front()->header.stamp;
+  for (std::size_t i = 0; i < road_msgs.size(); ++i) {
+    const RoadProfile& r = *road_msgs[i];
+    if (i > 0 && r.header.stamp == road_msgs[i - 1]->header.stamp) {
+      throw BagError(path + ": two '" + record.road_topic + "' messages stamped " +
+                     stampText(r.header.stamp));
+    }
+    if (!std::isfinite(r.left) || !std::isfinite(r.right)) {
+      throw BagError(path + ": '" + record.road_topic + "' message stamped " +
+                     stampText(r.header.stamp) + " has a non-finite height");
+    }
+    record.road.t.push_back(secondsSince(r.header.stamp, record.origin));
+    record.road.left.push_back(r.left);
+    record.road.right.push_back(r.right);
+  }
+
+  // Samples: by header stamp, relative to the road's origin.
+  std::vector<StampedSample> raw;
+  for (const auto& js : joint_msgs) {
+    const ros::Time& stamp = js->header.stamp;
+    if (stamp < record.origin) {
+      throw BagError(path + ": a '" + record.joint_states_topic + "' message is stamped " +
+                     stampText(stamp) + ", " + std::to_string(-secondsSince(stamp, record.origin)) +
+                     " s before the first '" + record.road_topic + "' message (" +
+                     stampText(record.origin) + ", the time origin t = 0)");
+    }
+    JointStateConversion c =
+        measurementFromJointState(*js, secondsSince(stamp, record.origin), options.joints);
+    for (const auto& p : c.problems) {
+      record.warnings.push_back("sample stamped " + stampText(stamp) + ": " + p);
+    }
+    record.skipped_elements += static_cast<int>(c.problems.size());
+    if (c.empty()) {
+      ++record.empty_samples;
+      continue;
+    }
+    raw.push_back({nanoseconds(stamp), stamp, std::move(c.measurement)});
+  }
+  if (record.empty_samples > 0) {
+    record.warnings.push_back(std::to_string(record.empty_samples) +
+                              " joint_states message(s) observed no suspension channel; skipped");
+  }
+  if (raw.empty()) {
+    throw BagError(path + ": no '" + record.joint_states_topic + "' message observes '" +
+                   options.joints.left + "' or '" + options.joints.right +
+                   "' (no samples); first problem: " +
+                   (record.warnings.empty() ? std::string("none") : record.warnings.front()));
+  }
+  record.samples = mergeEqualStamps(path, raw);
+  if (!truth_msgs.empty()) record.ground_truth = *truth_msgs.back();
+  return record;
+}
+
+void writeBag(const std::string& path, const BagContents& c) {
+  if (c.road.left.size() != c.road.t.size() || c.road.right.size() != c.road.t.size()) {
+    throw BagError(path + ": road time and height series differ in length");
+  }
+  try {
+    rosbag::Bag bag(path, rosbag::bagmode::Write);
+    // Merge road and samples by time (road first at equal times) so the bag
+    // plays in stamp order whatever the reader's tie-breaking.
+    std::size_t r = 0, s = 0;
+    if (c.ground_truth) {
+      bag.write(c.ground_truth_topic, c.ground_truth->header.stamp, *c.ground_truth);
+    }
+    while (r < c.road.t.size() || s < c.samples.size()) {
+      const bool road_next =
+          s >= c.samples.size() || (r < c.road.t.size() && c.road.t[r] <= c.samples[s].time);
+      if (road_next) {
+        const ros::Time stamp = stampAt(c.origin, c.road.t[r]);
+        bag.write(c.road_topic, stamp, roadProfileMessage(stamp, c.road.left[r], c.road.right[r]));
+        ++r;
+      } else {
+        const ros::Time stamp = stampAt(c.origin, c.samples[s].time);
+        bag.write(c.joint_states_topic, stamp,
+                  jointStateFromMeasurement(c.samples[s], stamp, c.joints));
+        ++s;
+      }
+    }
+    bag.close();
+  } catch (const BagError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw BagError(path + ": cannot write bag: " + e.what());
+  }
+}
+
+}  // namespace pc_ekf

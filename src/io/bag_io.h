@@ -1,0 +1,83 @@
+// Bags in the layout of INTERFACE.md (rosbag C++ API; ROS-dependent, part of
+// pc_ekf_ros, not of the ROS-free pc_ekf_io):
+//   road/profile             pc_ekf/RoadProfile       road heights under the tyres
+//   suspension/joint_states  sensor_msgs/JointState   the samples (u = position, v = velocity)
+//   ground_truth             pc_ekf/ParameterEstimate true values (synthesize_bag only)
+// Topics match on their suffix, so a leading namespace (/car1/road/profile)
+// is accepted. Times are header stamps; t = 0 is the stamp of the first
+// road/profile message (the vehicle at rest, INTERFACE.md "Time origin").
+#pragma once
+
+#include <pc_ekf/ParameterEstimate.h>
+#include <ros/time.h>
+
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "filter/measurement.h"
+#include "io/measurement_csv.h"
+#include "ros/message_conversion.h"
+
+namespace pc_ekf {
+
+// A bag that cannot be used; the message starts with the file name and
+// says what is wrong.
+class BagError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+constexpr const char* kRoadTopic = "road/profile";
+constexpr const char* kJointStatesTopic = "suspension/joint_states";
+constexpr const char* kGroundTruthTopic = "ground_truth";
+
+// True when `topic` is `suffix`, "/" + suffix, or ends in "/" + suffix.
+bool topicMatches(const std::string& topic, const std::string& suffix);
+
+struct BagReadOptions {
+  SuspensionJoints joints;
+  std::string road_topic = kRoadTopic;  // suffixes
+  std::string joint_states_topic = kJointStatesTopic;
+  std::string ground_truth_topic = kGroundTruthTopic;
+};
+
+struct BagRecord {
+  ros::Time origin;           // stamp of the first road/profile message (t = 0)
+  RoadSeries road;            // t in s since origin, strictly increasing
+  MeasurementSeries samples;  // t in s since origin, strictly increasing, non-empty
+  std::optional<ParameterEstimate> ground_truth;  // the last one, when present
+  std::string road_topic, joint_states_topic;     // the topics actually read
+  // Elements skipped while converting JointStates (unknown joints, +-Inf,
+  // wrong array lengths) and samples with no observed channel, one line each.
+  std::vector<std::string> warnings;
+  int skipped_elements = 0;
+  int empty_samples = 0;
+};
+
+// Reads and validates a bag. Throws BagError (naming the file) for a missing,
+// unreadable, truncated or corrupt bag; no road/profile or joint_states
+// messages; several topics matching one suffix or a matching topic of the
+// wrong type; two road messages with the same stamp; samples stamped before
+// the first road message; two samples with the same stamp observing the
+// same channel (samples with the same stamp and disjoint channels merge).
+BagRecord readBag(const std::string& path, const BagReadOptions& options = {});
+
+// What writeBag writes: road samples and measurement samples at
+// origin + t (header stamp = bag record time), and an optional ground truth.
+struct BagContents {
+  ros::Time origin;
+  RoadSeries road;
+  MeasurementSeries samples;
+  std::optional<ParameterEstimate> ground_truth;  // written at its header stamp
+  SuspensionJoints joints;
+  std::string road_topic = kRoadTopic;  // full topic names as written
+  std::string joint_states_topic = kJointStatesTopic;
+  std::string ground_truth_topic = kGroundTruthTopic;
+};
+
+// Writes (overwrites) an uncompressed bag. Throws BagError naming the file.
+void writeBag(const std::string& path, const BagContents& contents);
+
+}  // namespace pc_ekf

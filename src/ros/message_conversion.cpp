@@ -1,0 +1,364 @@
+#include "ros/message_conversion.h"
+
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "filter/pc_propagator.h"
+#include "pc/germ.h"
+
+namespace pc_ekf {
+
+namespace {
+
+constexpr std::int64_t kNanosecondsPerSecond = 1000000000LL;
+
+std::int64_t nanoseconds(const ros::Time& t) {
+  return static_cast<std::int64_t>(t.sec) * kNanosecondsPerSecond + t.nsec;
+}
+
+ros::Time timeFromNanoseconds(std::int64_t ns, const char* what) {
+  constexpr std::int64_t kMax = (static_cast<std::int64_t>(1) << 32) * kNanosecondsPerSecond;
+  if (ns < 0 || ns >= kMax) {
+    throw std::invalid_argument(std::string(what) + ": time outside ros::Time's range [0, 2^32) s");
+  }
+  ros::Time t;
+  t.sec = static_cast<std::uint32_t>(ns / kNanosecondsPerSecond);
+  t.nsec = static_cast<std::uint32_t>(ns % kNanosecondsPerSecond);
+  return t;
+}
+
+std::vector<double> toStd(const Eigen::VectorXd& v) { return {v.data(), v.data() + v.size()}; }
+
+std::string coherenceWarning(const ParameterEstimate& msg) {
+  std::ostringstream w;
+  w << "multi-rate coherence check: full and decimated (1 in " << msg.coherence_decimation
+    << ") streams disagree by more than " << msg.coherence_threshold
+    << " combined standard deviations";
+  return w.str();
+}
+
+}  // namespace
+
+double secondsSince(const ros::Time& stamp, const ros::Time& origin) {
+  // Division (not multiplication by 1e-9) rounds correctly: 300000000 ns -> 0.3.
+  return static_cast<double>(nanoseconds(stamp) - nanoseconds(origin)) /
+         static_cast<double>(kNanosecondsPerSecond);
+}
+
+ros::Time stampAt(const ros::Time& origin, double t) {
+  if (!std::isfinite(t) || std::abs(t) > 5e9) {
+    throw std::invalid_argument("stampAt: time offset not finite or beyond ros::Time's range");
+  }
+  return timeFromNanoseconds(nanoseconds(origin) + std::llround(t * 1e9), "stampAt");
+}
+
+ros::Time timeFromSeconds(double seconds) {
+  if (!std::isfinite(seconds) || seconds < 0.0 || seconds >= 4294967296.0) {
+    throw std::invalid_argument("time " + std::to_string(seconds) +
+                                " s is not in ros::Time's range [0, 2^32)");
+  }
+  const double whole = std::floor(seconds);
+  std::int64_t ns = static_cast<std::int64_t>(whole) * kNanosecondsPerSecond +
+                    std::llround((seconds - whole) * 1e9);
+  return timeFromNanoseconds(ns, "timeFromSeconds");
+}
+
+// ---------------------------------------------------------------- JointState
+
+JointStateConversion measurementFromJointState(const sensor_msgs::JointState& msg, double time,
+                                               const SuspensionJoints& joints) {
+  JointStateConversion out;
+  out.measurement.time = time;
+  const std::size_t n = msg.name.size();
+  const bool positions_ok = msg.position.empty() || msg.position.size() == n;
+  const bool velocities_ok = msg.velocity.empty() || msg.velocity.size() == n;
+  if (!positions_ok) {
+    out.problems.push_back("position has " + std::to_string(msg.position.size()) + " entries for " +
+                           std::to_string(n) + " joint names; ignored");
+  }
+  if (!velocities_ok) {
+    out.problems.push_back("velocity has " + std::to_string(msg.velocity.size()) + " entries for " +
+                           std::to_string(n) + " joint names; ignored");
+  }
+
+  // side 0 = left (u1, v1), 1 = right (u2, v2); -1 = not in the message.
+  int index[2] = {-1, -1};
+  bool duplicate[2] = {false, false};
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::string& name = msg.name[i];
+    int side = -1;
+    if (name == joints.left)
+      side = 0;
+    else if (name == joints.right)
+      side = 1;
+    if (side < 0) {
+      out.problems.push_back("unknown joint name '" + name + "' (expected '" + joints.left +
+                             "' or '" + joints.right + "'); ignored");
+      continue;
+    }
+    if (index[side] >= 0) duplicate[side] = true;
+    index[side] = static_cast<int>(i);
+  }
+
+  double values[4];
+  bool observed[4] = {false, false, false, false};
+  for (int side = 0; side < 2; ++side) {
+    const std::string& name = side == 0 ? joints.left : joints.right;
+    if (duplicate[side]) {
+      out.problems.push_back("joint '" + name + "' appears more than once; ignored");
+      continue;
+    }
+    if (index[side] < 0) continue;
+    const auto take = [&](const std::vector<double>& array, bool usable, int channel,
+                          const char* field) {
+      if (!usable || array.empty()) return;
+      const double v = array[index[side]];
+      if (std::isnan(v)) return;  // not observed
+      if (!std::isfinite(v)) {
+        out.problems.push_back(std::string(field) + " of '" + name + "' is not finite; ignored");
+        return;
+      }
+      values[channel] = v;
+      observed[channel] = true;
+    };
+    take(msg.position, positions_ok, side == 0 ? kChannelU1 : kChannelU2, "position");
+    take(msg.velocity, velocities_ok, side == 0 ? kChannelV1 : kChannelV2, "velocity");
+  }
+
+  std::vector<double> kept;
+  for (int c = 0; c < 4; ++c) {
+    if (!observed[c]) continue;
+    out.measurement.channels.push_back(c);
+    kept.push_back(values[c]);
+  }
+  out.measurement.values = Eigen::Map<const Eigen::VectorXd>(kept.data(), kept.size());
+  return out;
+}
+
+sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ros::Time& stamp,
+                                                  const SuspensionJoints& joints) {
+  if (static_cast<Eigen::Index>(m.channels.size()) != m.values.size()) {
+    throw std::invalid_argument("jointStateFromMeasurement: " + std::to_string(m.channels.size()) +
+                                " channels but " + std::to_string(m.values.size()) + " values");
+  }
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  double values[4] = {nan, nan, nan, nan};
+  for (std::size_t i = 0; i < m.channels.size(); ++i) {
+    const int c = m.channels[i];
+    if (c < 0 || c > 3) {
+      throw std::invalid_argument("jointStateFromMeasurement: channel " + std::to_string(c) +
+                                  " is not one of u1, u2, v1, v2 (0..3)");
+    }
+    values[c] = m.values(static_cast<Eigen::Index>(i));
+  }
+  sensor_msgs::JointState js;
+  js.header.stamp = stamp;
+  js.name = {joints.left, joints.right};
+  js.position = {values[kChannelU1], values[kChannelU2]};
+  js.velocity = {values[kChannelV1], values[kChannelV2]};
+  return js;
+}
+
+RoadProfile roadProfileMessage(const ros::Time& stamp, double left, double right) {
+  RoadProfile r;
+  r.header.stamp = stamp;
+  r.left = left;
+  r.right = right;
+  return r;
+}
+
+// ------------------------------------------------------------------ estimates
+
+void setParameters(ParameterEstimate& msg, const ParameterMapping& mapping,
+                   const Eigen::VectorXd& mean, const Eigen::VectorXd& stddev) {
+  const int n = mapping.count();
+  if (mean.size() != n || stddev.size() != n) {
+    throw std::invalid_argument("setParameters: " + std::to_string(mean.size()) + " means and " +
+                                std::to_string(stddev.size()) + " stddevs for " +
+                                std::to_string(n) + " parameters");
+  }
+  msg.names = mapping.names();
+  msg.mean = toStd(mean);
+  msg.stddev = toStd(stddev);
+  // The map value = nominal (1 + range xi) is affine: xi of the mean is the
+  // germ mean, and the germ stddev is stddev / |nominal range|.
+  msg.xi_mean = toStd(mapping.germOf(mean));
+  msg.xi_stddev.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const auto& p = mapping.uncertain()[i];
+    const double scale = std::abs(p.nominal * p.relative_range);
+    msg.xi_stddev[i] = scale > 0.0 ? stddev(i) / scale : std::numeric_limits<double>::quiet_NaN();
+  }
+}
+
+void setBasis(ParameterEstimate& msg, const PolynomialBasis& basis) {
+  msg.germ_family.clear();
+  msg.germ_alpha.clear();
+  msg.germ_beta.clear();
+  for (const GermSpec& g : basis.germs()) {
+    msg.germ_family.push_back(toString(g.family));
+    msg.germ_alpha.push_back(g.alpha);
+    msg.germ_beta.push_back(g.beta);
+  }
+  msg.total_degree = static_cast<std::uint32_t>(basis.order());
+  msg.multi_indices.clear();
+  msg.multi_indices.reserve(basis.size() * basis.dimension());
+  for (const auto& index : basis.multiIndices()) {
+    for (int e : index) msg.multi_indices.push_back(static_cast<std::uint32_t>(e));
+  }
+  msg.term_count = static_cast<std::uint32_t>(basis.size());
+}
+
+void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients) {
+  msg.coefficients.resize(coefficients.size());
+  const Eigen::Index rows = coefficients.rows(), cols = coefficients.cols();
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (Eigen::Index j = 0; j < cols; ++j) msg.coefficients[i * cols + j] = coefficients(i, j);
+  }
+  if (coefficients.size() > 0) msg.term_count = static_cast<std::uint32_t>(cols);
+}
+
+void setHealth(ParameterEstimate& msg, const HealthStatus& h, int nis_channels,
+               const HealthSettings& settings) {
+  msg.nis = h.nis;
+  msg.nis_channels = static_cast<std::uint32_t>(std::max(0, nis_channels));
+  msg.nis_confidence = settings.nis_confidence;
+  msg.nis_lower = h.nis_lower;
+  msg.nis_upper = h.nis_upper;
+  msg.nis_outside = h.nis_outside;
+  msg.nis_window = static_cast<std::uint32_t>(std::max(0, settings.nis_window));
+  msg.nis_window_mean = h.nis_window_mean;
+  msg.nis_window_lower = h.window_lower;
+  msg.nis_window_upper = h.window_upper;
+  msg.nis_window_outside = h.nis_window_outside;
+  msg.mass_outside_support = toStd(h.mass_outside_support);
+  msg.support_exceeded = h.support_exceeded;
+  msg.non_finite = h.non_finite;
+  msg.forecast_failed = h.forecast_failed;
+  msg.band_nested = h.band_nested;
+  msg.healthy = h.healthy() && !msg.coherence_flagged;
+  msg.warnings = h.warnings();
+  if (msg.coherence_flagged) msg.warnings.push_back(coherenceWarning(msg));
+}
+
+void setCoherence(ParameterEstimate& msg, const Eigen::VectorXd& disagreement, int decimation,
+                  double threshold) {
+  msg.coherence_disagreement = toStd(disagreement);
+  msg.coherence_decimation = static_cast<std::uint32_t>(std::max(0, decimation));
+  msg.coherence_threshold = threshold;
+  // NaN disagreement counts as flagged.
+  msg.coherence_flagged = !(disagreement.array() <= threshold).all();
+  if (msg.coherence_flagged) {
+    msg.healthy = false;
+    msg.warnings.push_back(coherenceWarning(msg));
+  }
+}
+
+ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasis& basis,
+                                  const ParameterMapping& mapping,
+                                  const HealthSettings& health_settings,
+                                  const EstimateContext& context) {
+  ParameterEstimate msg;
+  msg.header.stamp = context.stamp;
+  msg.header.frame_id = context.frame_id;
+  msg.sample_index = static_cast<std::uint32_t>(std::max(0, result.index));
+  msg.time = result.time;
+  msg.method = context.method;
+  msg.update_rule = context.update_rule;
+  setParameters(msg, mapping, result.mean, result.stddev);
+  setBasis(msg, basis);
+  if (result.coefficients.size() > 0 && result.coefficients.cols() != basis.size()) {
+    throw std::invalid_argument("estimateMessage: coefficients have " +
+                                std::to_string(result.coefficients.cols()) + " terms, basis " +
+                                std::to_string(basis.size()));
+  }
+  setCoefficients(msg, result.coefficients);
+  setHealth(msg, result.health, result.update.channels, health_settings);
+  return msg;
+}
+
+ParameterEstimate estimateMessage(const StepResult& result, const PcPropagator& propagator,
+                                  const HealthSettings& health_settings,
+                                  const EstimateContext& context) {
+  return estimateMessage(result, propagator.basis(), propagator.mapping(), health_settings,
+                         context);
+}
+
+ParameterEstimate groundTruthMessage(const ParameterMapping& mapping,
+                                     const Eigen::VectorXd& xi_truth, const PolynomialBasis* basis,
+                                     const ros::Time& stamp) {
+  const int n = mapping.count();
+  if (xi_truth.size() != n) {
+    throw std::invalid_argument("groundTruthMessage: " + std::to_string(xi_truth.size()) +
+                                " germ values for " + std::to_string(n) + " parameters");
+  }
+  ParameterEstimate msg;
+  msg.header.stamp = stamp;
+  msg.sample_index = 0;
+  msg.time = 0.0;
+  msg.method = "truth";
+  const Eigen::VectorXd values = mapping.valuesAtGerms(xi_truth.transpose()).col(0);
+  setParameters(msg, mapping, values, Eigen::VectorXd::Zero(n));
+  msg.xi_mean = toStd(xi_truth);  // exact, not through the inverse map
+  if (basis != nullptr) {
+    setBasis(msg, *basis);
+    Eigen::MatrixXd coefficients = Eigen::MatrixXd::Zero(n, basis->size());
+    coefficients.col(0) = values;
+    setCoefficients(msg, coefficients);
+  }
+  msg.healthy = true;
+  msg.band_nested = true;
+  msg.mass_outside_support.assign(n, 0.0);
+  return msg;
+}
+
+// ------------------------------------------------------------------ densities
+
+ParameterPdf pdfMessage(const std::vector<std::string>& names,
+                        const std::vector<Histogram>& histograms,
+                        const std::vector<double>& mass_outside, int sample_index,
+                        const ros::Time& stamp) {
+  if (names.size() != histograms.size() ||
+      (!mass_outside.empty() && mass_outside.size() != names.size())) {
+    throw std::invalid_argument("pdfMessage: " + std::to_string(names.size()) + " names, " +
+                                std::to_string(histograms.size()) + " histograms, " +
+                                std::to_string(mass_outside.size()) + " outside masses");
+  }
+  ParameterPdf msg;
+  msg.header.stamp = stamp;
+  msg.sample_index = static_cast<std::uint32_t>(std::max(0, sample_index));
+  msg.names = names;
+  for (std::size_t i = 0; i < histograms.size(); ++i) {
+    const Histogram& h = histograms[i];
+    if (h.edges.size() != h.densities.size() + 1) {
+      throw std::invalid_argument("pdfMessage: histogram of '" + names[i] + "' has " +
+                                  std::to_string(h.edges.size()) + " edges for " +
+                                  std::to_string(h.densities.size()) + " bins");
+    }
+    msg.bin_count.push_back(static_cast<std::uint32_t>(h.densities.size()));
+    msg.edges.insert(msg.edges.end(), h.edges.data(), h.edges.data() + h.edges.size());
+    msg.densities.insert(msg.densities.end(), h.densities.data(),
+                         h.densities.data() + h.densities.size());
+    msg.mass_outside.push_back(mass_outside.empty() ? 0.0 : mass_outside[i]);
+  }
+  return msg;
+}
+
+Eigen::MatrixXd coefficientsOf(const ParameterEstimate& msg) {
+  const std::size_t rows = msg.names.size(), cols = msg.term_count;
+  if (msg.coefficients.size() != rows * cols) {
+    throw std::invalid_argument("ParameterEstimate: " + std::to_string(msg.coefficients.size()) +
+                                " coefficients for " + std::to_string(rows) + " parameters x " +
+                                std::to_string(cols) + " terms");
+  }
+  Eigen::MatrixXd c(rows, cols);
+  for (std::size_t i = 0; i < rows; ++i) {
+    for (std::size_t j = 0; j < cols; ++j) c(i, j) = msg.coefficients[i * cols + j];
+  }
+  return c;
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,134 @@
+// Conversion between ROS messages and the ROS-free core types: time stamps,
+// suspension JointState -> Measurement, road samples, and the core's
+// estimates -> pc_ekf/ParameterEstimate and pc_ekf/ParameterPdf.
+// No node logic here: the node and the bag tools share these functions.
+#pragma once
+
+#include <pc_ekf/ParameterEstimate.h>
+#include <pc_ekf/ParameterPdf.h>
+#include <pc_ekf/RoadProfile.h>
+#include <ros/time.h>
+#include <sensor_msgs/JointState.h>
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+#include "filter/health.h"
+#include "filter/measurement.h"
+#include "filter/one_step_filter.h"
+#include "filter/uncertain_parameters.h"
+#include "pc/pc_statistics.h"
+#include "pc/polynomial_basis.h"
+
+namespace pc_ekf {
+
+// ---- time: seconds since the time origin (INTERFACE.md "Time origin") ----
+
+// (stamp - origin) in seconds, from the exact nanosecond difference, so
+// stamps written by stampAt() give back the same double for times that are
+// whole nanoseconds (k * 0.03 s and the like).
+double secondsSince(const ros::Time& stamp, const ros::Time& origin);
+// origin + t, rounded to the nearest nanosecond. Throws std::invalid_argument
+// when t is not finite or the result is outside ros::Time's range.
+ros::Time stampAt(const ros::Time& origin, double t);
+// Seconds (e.g. a command-line --start-time) to a ros::Time, nanosecond
+// rounding; throws std::invalid_argument when not finite or not in [0, 2^32).
+ros::Time timeFromSeconds(double seconds);
+
+// ---- suspension measurements (sensor_msgs/JointState) ----
+
+// Joint names of the two suspensions; configurable (INTERFACE.md).
+struct SuspensionJoints {
+  std::string left = "left_suspension";    // tyre 1: position u1, velocity v1
+  std::string right = "right_suspension";  // tyre 2: position u2, velocity v2
+};
+
+// Channel order of the model (RollPlaneModel::channelNames()): u1, u2, v1, v2.
+constexpr int kChannelU1 = 0, kChannelU2 = 1, kChannelV1 = 2, kChannelV2 = 3;
+
+struct JointStateConversion {
+  // Channels with a finite value, ascending; `time` is the caller's t.
+  // NaN (and absent arrays or joints) mean "not observed" and are not problems.
+  Measurement measurement;
+  // One line per rejected element or array: unknown joint name, duplicate
+  // joint, position/velocity array length different from name's, +-Inf.
+  // The rest of the message is still converted.
+  std::vector<std::string> problems;
+  bool empty() const { return measurement.channels.empty(); }
+};
+
+// Converts one JointState taken at `time` (s since the origin):
+// position = u (m), velocity = v (m/s) of the named joints; effort ignored.
+JointStateConversion measurementFromJointState(const sensor_msgs::JointState& msg, double time,
+                                               const SuspensionJoints& joints = {});
+
+// The inverse, for writing bags: names {left, right}, position [u1, u2],
+// velocity [v1, v2], NaN where a channel is not observed. Throws
+// std::invalid_argument for a channel index outside 0..3 or a size mismatch.
+sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ros::Time& stamp,
+                                                  const SuspensionJoints& joints = {});
+
+// ---- road ----
+RoadProfile roadProfileMessage(const ros::Time& stamp, double left, double right);
+
+// ---- estimates (pc_ekf/ParameterEstimate) ----
+
+// What the core structs do not know: stamp, frame and provenance.
+struct EstimateContext {
+  ros::Time stamp;       // stamp of the answered sample
+  std::string frame_id;  // usually empty
+  std::string method = "one_step";
+  std::string update_rule;  // "paper" | "square_root" | ""
+};
+
+// The building blocks (the node's batch/EnKF results use them directly):
+// names, mean, stddev and their germ coordinates through `mapping`.
+void setParameters(ParameterEstimate& msg, const ParameterMapping& mapping,
+                   const Eigen::VectorXd& mean, const Eigen::VectorXd& stddev);
+// Basis description: germ family/shapes, total degree, multi-indices (row-major).
+void setBasis(ParameterEstimate& msg, const PolynomialBasis& basis);
+// coefficients (parameters x S) row-major plus term_count; an empty matrix
+// clears them.
+void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients);
+// Health fields of SPEC §3.6 (also sets `healthy` and `warnings`, keeping a
+// coherence flag already set).
+void setHealth(ParameterEstimate& msg, const HealthStatus& health, int nis_channels,
+               const HealthSettings& settings);
+// Multi-rate coherence (SPEC §3.6): flagged when any disagreement exceeds
+// `threshold`; a flag makes the estimate unhealthy and adds a warning.
+void setCoherence(ParameterEstimate& msg, const Eigen::VectorXd& disagreement, int decimation,
+                  double threshold);
+
+// One processed sample of OneStepFilter: everything above but coherence.
+ParameterEstimate estimateMessage(const StepResult& result, const PcPropagator& propagator,
+                                  const HealthSettings& health_settings,
+                                  const EstimateContext& context);
+// The same from the pieces (basis and mapping without a propagator).
+ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasis& basis,
+                                  const ParameterMapping& mapping,
+                                  const HealthSettings& health_settings,
+                                  const EstimateContext& context);
+
+// Ground truth: method "truth", mean = the true values of the mapped
+// parameters at germ point `xi_truth`, stddev 0, xi_mean = xi_truth,
+// xi_stddev 0, and, with a basis, the constant expansion [value, 0, ..., 0];
+// healthy, sample_index 0.
+ParameterEstimate groundTruthMessage(const ParameterMapping& mapping,
+                                     const Eigen::VectorXd& xi_truth, const PolynomialBasis* basis,
+                                     const ros::Time& stamp);
+
+// ---- densities (pc_ekf/ParameterPdf) ----
+// `mass_outside` may be empty (zeros) or one per histogram. Throws
+// std::invalid_argument when the sizes disagree.
+ParameterPdf pdfMessage(const std::vector<std::string>& names,
+                        const std::vector<Histogram>& histograms,
+                        const std::vector<double>& mass_outside, int sample_index,
+                        const ros::Time& stamp);
+
+// ---- reading back (tests, tools) ----
+// Coefficients (names.size() x term_count) of a message; throws
+// std::invalid_argument when the array has the wrong size.
+Eigen::MatrixXd coefficientsOf(const ParameterEstimate& msg);
+
+}  // namespace pc_ekf
