@@ -12,7 +12,7 @@ PC_EKF_APT_PACKAGES=(
   build-essential cmake libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev
   libbenchmark-dev ros-core-dev python3-rostest python3-roslaunch python3-rosmaster
   python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev colcon
-  python3-colcon-ros
+  python3-colcon-ros python3-matplotlib python3-numpy
 )
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }

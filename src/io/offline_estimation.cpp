@@ -165,7 +165,7 @@ void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
 
 void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
              std::shared_ptr<const RollPlaneModel> model, const ProgressCallback& progress,
-             OfflineResult* r) {
+             const CoarseGridCache* cache, OfflineResult* r) {
   ReferencePosteriorSettings s;
   s.coarse_points = c.grid.coarse_points;
   s.fine_points = c.grid.fine_points;
@@ -175,7 +175,7 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
   s.bins = c.pdf.bins;
   const ReferencePosterior p =
       computeReferencePosterior(*model, ParameterMapping(*model, c.uncertain), series,
-                                makeNoiseModel(c), c.integration, s, nullptr, progress);
+                                makeNoiseModel(c), c.integration, s, cache, progress);
   summarise(c, p.mean, p.stddev, r);
   r->records.push_back({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time,
                         p.mean, p.stddev, Eigen::MatrixXd(), 0.0, false, true, true});
@@ -192,7 +192,8 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
 OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,
                                    std::shared_ptr<const RollPlaneModel> model,
                                    EstimationMethod method, std::uint64_t seed,
-                                   const ProgressCallback& progress) {
+                                   const ProgressCallback& progress,
+                                   const CoarseGridCache* grid_cache) {
   const auto start = std::chrono::steady_clock::now();
   OfflineResult r;
   r.method = toString(method);
@@ -205,7 +206,7 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
       runBatch(c, series, makePropagator(c, model), c.es_mda.alphas, &r);
       break;
     case EstimationMethod::kEnkf: runEnkf(c, series, model, seed, progress, &r); break;
-    case EstimationMethod::kGrid: runGrid(c, series, model, progress, &r); break;
+    case EstimationMethod::kGrid: runGrid(c, series, model, progress, grid_cache, &r); break;
   }
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;

@@ -64,10 +64,16 @@ struct OfflineResult {
 
 using ProgressCallback = std::function<void(const std::string&)>;
 
+class CoarseGridCache;
+
+// `grid_cache` (grid method only) holds the coarse-grid simulations for the
+// record's sample times; they do not depend on the data, so reproductions over
+// many seeds build it once per configuration.
 OfflineResult runOfflineEstimation(const EstimatorConfig& config, const MeasurementSeries& series,
                                    std::shared_ptr<const RollPlaneModel> model,
                                    EstimationMethod method, std::uint64_t seed,
-                                   const ProgressCallback& progress = {});
+                                   const ProgressCallback& progress = {},
+                                   const CoarseGridCache* grid_cache = nullptr);
 
 std::string toJson(const OfflineResult& r);
 // samples.csv, pdfs.csv and result.json in `dir` (created). Throws std::runtime_error.
