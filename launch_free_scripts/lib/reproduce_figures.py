@@ -156,11 +156,12 @@ def draw_coherence(out, runs):
     for j, d in enumerate(datasets):
         for off, method, color in ((-0.15, "one_step_paper", "tab:orange"),
                                    (0.15, "one_step_square_root", "tab:blue")):
-            vals = [max(r["result"]["coherence"]["disagreement"] or [0.0]) for r in runs[d][method]]
+            vals = [max(max(r["result"]["coherence"]["disagreement"] or [0.0]), 1e-2)
+                    for r in runs[d][method]]
             ax.scatter(np.full(len(vals), j + off), vals, s=12, color=color,
                        label=LABELS[method] if j == 0 else None)
     ax.axhline(3.0, color="r", lw=1, label="flag threshold (3)")
-    ax.set_yscale("symlog", linthresh=1.0)
+    ax.set_yscale("log")
     ax.set_xticks(range(len(datasets)), datasets)
     ax.set_ylabel("max over parameters of |m_full - m_dec| / combined std")
     ax.set_title("Multi-rate coherence check (full stream vs every 10th sample), one point per seed")

@@ -146,8 +146,12 @@ def findings(summary):
         out.append(f"- Case {case} ({method}, {dataset}): the paper's xi = ({px[0]}, {px[1]}) is "
                    f"{'within' if inside else 'outside'} ±2 seed-spreads of ours "
                    f"({ours[0]:.4f} ± {sp[0]:.4f}, {ours[1]:.4f} ± {sp[1]:.4f}): "
-                   f"{'reproduced' if inside else 'not reproduced as a typical outcome'}.")
+                   f"{'reproduced' if inside else 'not reproduced as a typical outcome'}; "
+                   f"coverage of the truth {s['M_coverage']:.2f}/{s['d_coverage']:.2f}, "
+                   f"flagged unhealthy in {s['flagged']:.0%} of runs.")
     for dataset in sorted(summary):
+        if not any(c[1] == dataset for c in CASES):
+            continue  # the error-against-N runs have their own figure
         d = summary[dataset]
         if "one_step_paper" in d and "one_step_square_root" in d:
             p, q = d["one_step_paper"], d["one_step_square_root"]
