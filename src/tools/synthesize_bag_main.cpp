@@ -5,7 +5,6 @@
 #include <cmath>
 #include <fstream>
 #include <iostream>
-#include <map>
 #include <string>
 
 #include "filter/uncertain_parameters.h"
@@ -14,6 +13,7 @@
 #include "io/measurement_csv.h"
 #include "pc/polynomial_basis.h"
 #include "ros/message_conversion.h"
+#include "tools/command_line.h"
 
 namespace {
 
@@ -23,11 +23,6 @@ const char* kUsage =
     "                      [--csv FILE.csv]\n"
     "Writes road/profile at HZ from t = 0 to the last sample, suspension/joint_states\n"
     "at the config's sample times and ground_truth, stamped START + t.\n";
-
-int badInput(const std::string& reason) {
-  std::cerr << "synthesize_bag: " << reason << "\n";
-  return 2;
-}
 
 // Parses a finite double; false when the whole text is not one.
 bool parseDouble(const std::string& text, double* value) {
@@ -44,55 +39,39 @@ bool parseDouble(const std::string& text, double* value) {
 
 int main(int argc, char** argv) {
   using namespace pc_ekf;
-  std::map<std::string, std::string> args;
-  for (int i = 1; i < argc; ++i) {
-    const std::string key = argv[i];
-    if (key == "-h" || key == "--help") {
-      std::cout << kUsage;
-      return 0;
-    }
-    static const char* known[] = {"--config",    "--output",     "--seed",
-                                  "--road-rate", "--start-time", "--csv"};
-    bool ok = false;
-    for (const char* k : known) ok = ok || key == k;
-    if (!ok) return badInput("unknown option '" + key + "'\n" + kUsage);
-    if (i + 1 >= argc) return badInput("option " + key + " needs a value");
-    args[key] = argv[++i];
-  }
-  if (!args.count("--config")) return badInput(std::string("--config is required\n") + kUsage);
-  if (!args.count("--output")) return badInput(std::string("--output is required\n") + kUsage);
+  CommandLine args("synthesize_bag", kUsage);
+  const int parsed = args.parse(
+      argc, argv, {"--config", "--output", "--seed", "--road-rate", "--start-time", "--csv"});
+  if (parsed >= 0) return parsed;
+  if (!args.has("--config")) return args.badInput(std::string("--config is required\n") + kUsage);
+  if (!args.has("--output")) return args.badInput(std::string("--output is required\n") + kUsage);
 
   double road_rate = 1000.0;
-  if (args.count("--road-rate") &&
+  if (args.has("--road-rate") &&
       (!parseDouble(args["--road-rate"], &road_rate) || road_rate <= 0.0 || road_rate > 1e6)) {
-    return badInput("--road-rate '" + args["--road-rate"] + "' is not a rate in (0, 1e6] Hz");
+    return args.badInput("--road-rate '" + args["--road-rate"] + "' is not a rate in (0, 1e6] Hz");
   }
   double start_time = 1.0e9;
-  if (args.count("--start-time") && (!parseDouble(args["--start-time"], &start_time) ||
+  if (args.has("--start-time") && (!parseDouble(args["--start-time"], &start_time) ||
                                      start_time <= 0.0 || start_time > 4.0e9)) {
-    return badInput("--start-time '" + args["--start-time"] +
+    return args.badInput("--start-time '" + args["--start-time"] +
                     "' is not a time in (0, 4e9] s (ros::Time must stay positive)");
   }
 
-  try {
+  return args.run([&] {
     const EstimatorConfig config = loadConfigFile(args["--config"]);
     std::uint64_t seed = config.truth.seed;
-    if (args.count("--seed")) {
-      const std::string& s = args["--seed"];
-      if (s.empty() || s.find_first_not_of("0123456789") != std::string::npos || s.size() > 19) {
-        return badInput("--seed '" + s + "' is not a non-negative integer");
-      }
-      seed = std::stoull(s);
-    }
+    int status = 0;
+    if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
     if (config.road.source == RoadSource::kTopic) {
-      return badInput(config.source +
+      return args.badInput(config.source +
                       ": key 'road.source' is topic; synthesize_bag needs an analytic or series "
                       "road to simulate");
     }
     const auto road = makeRoad(config);
     const auto model = makeModel(config, road);
     const MeasurementSeries samples = synthesizeFromConfig(config, *model, seed);
-    if (samples.empty()) return badInput(config.source + ": the config gives no samples");
+    if (samples.empty()) return args.badInput(config.source + ": the config gives no samples");
 
     BagContents bag;
     bag.origin = timeFromSeconds(start_time);
@@ -100,7 +79,7 @@ int main(int argc, char** argv) {
     const double t_last = samples.back().time;
     const long count = static_cast<long>(std::ceil(t_last * road_rate - 1e-9)) + 1;
     if (count > 50000000L) {
-      return badInput("--road-rate " + args["--road-rate"] + " gives " + std::to_string(count) +
+      return args.badInput("--road-rate " + args["--road-rate"] + " gives " + std::to_string(count) +
                       " road messages over " + std::to_string(t_last) + " s; too many");
     }
     for (long i = 0; i < count; ++i) {
@@ -119,27 +98,16 @@ int main(int argc, char** argv) {
     bag.ground_truth = groundTruthMessage(mapping, xi, &basis, bag.origin);
 
     writeBag(args["--output"], bag);
-    if (args.count("--csv")) {
+    if (args.has("--csv")) {
       std::ofstream csv(args["--csv"]);
-      if (!csv) return badInput(args["--csv"] + ": cannot open for writing");
+      if (!csv) return args.badInput(args["--csv"] + ": cannot open for writing");
       writeMeasurementCsv(csv, samples);
       csv.flush();
-      if (!csv) return badInput(args["--csv"] + ": write failed");
+      if (!csv) return args.badInput(args["--csv"] + ": write failed");
     }
     std::cerr << "synthesize_bag: wrote " << args["--output"] << " (" << samples.size()
               << " samples, " << count << " road messages at " << road_rate << " Hz over " << t_last
               << " s, seed " << seed << ")\n";
     return 0;
-  } catch (const ConfigError& e) {
-    return badInput(e.what());
-  } catch (const CsvError& e) {
-    return badInput(e.what());
-  } catch (const BagError& e) {
-    return badInput(e.what());
-  } catch (const std::invalid_argument& e) {
-    return badInput(e.what());
-  } catch (const std::exception& e) {
-    std::cerr << "synthesize_bag: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }
