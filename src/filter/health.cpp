@@ -1,6 +1,7 @@
 #include "filter/health.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "pc/orthonormal_family.h"
@@ -33,6 +34,9 @@ HealthMonitor::HealthMonitor(const PcPropagator& propagator, const HealthSetting
   const int n = propagator.parameterCount();
   psi_ = propagator.basis().evaluate(
       sampleGerms(propagator.basis(), settings.support_draws, settings.seed));
+  psi_max_abs_ = psi_.rows() > 0 ? Eigen::VectorXd(psi_.cwiseAbs().colwise().maxCoeff().transpose())
+                                 : Eigen::VectorXd::Zero(psi_.cols());
+  values_.resize(psi_.rows());
   lower_.resize(n);
   upper_.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -47,16 +51,48 @@ void HealthMonitor::reset() {
   last_std_.resize(0);
 }
 
+double HealthMonitor::nisBound(bool upper, int dof) {
+  std::vector<double>& cache = bound_cache_[upper ? 1 : 0];
+  if (dof >= static_cast<int>(cache.size())) {
+    cache.resize(dof + 1, std::numeric_limits<double>::quiet_NaN());
+  }
+  double& bound = cache[dof];
+  if (std::isnan(bound)) {
+    const double tail = (1.0 - settings_.nis_confidence) / 2.0;
+    bound = chiSquareQuantile(upper ? 1.0 - tail : tail, dof);
+  }
+  return bound;
+}
+
+double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i) {
+  if (psi_.rows() == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
+  const double lower = lower_[i], upper = upper_[i], mean = coeffs(i, 0);
+  // Every draw's value lies in mean +- spread (|psi_j| <= psi_max_abs_j), up to the
+  // dot product's round-off (bounded by S eps (|mean| + spread); 4x margin). When
+  // that interval is inside the support, no draw is outside: the 2000 x S product
+  // is skipped, which is the common case once the data have narrowed the PDF.
+  double spread = 0.0;
+  for (Eigen::Index j = 1; j < coeffs.cols(); ++j) spread += std::abs(coeffs(i, j)) * psi_max_abs_[j];
+  const double slack = 4.0 * static_cast<double>(coeffs.cols()) *
+                       std::numeric_limits<double>::epsilon() * (std::abs(mean) + spread);
+  if (mean - spread - slack >= lower && mean + spread + slack <= upper) return 0.0;
+  values_.noalias() = psi_ * coeffs.row(i).transpose();
+  Eigen::Index outside = 0;
+  for (Eigen::Index d = 0; d < values_.size(); ++d) {
+    outside += (values_[d] < lower) || (values_[d] > upper);
+  }
+  return static_cast<double>(outside) / static_cast<double>(values_.size());
+}
+
 HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
                                    const Eigen::MatrixXd& coeffs) {
   HealthStatus h;
   h.forecast_failed = !forecast.ok;
   h.non_finite = !update.finite || !coeffs.allFinite();
-  const double tail = (1.0 - settings_.nis_confidence) / 2.0;
   if (update.channels > 0 && !h.non_finite) {
     h.nis = update.nis;
-    h.nis_lower = chiSquareQuantile(tail, update.channels);
-    h.nis_upper = chiSquareQuantile(1.0 - tail, update.channels);
+    h.nis_lower = nisBound(false, update.channels);
+    h.nis_upper = nisBound(true, update.channels);
     h.nis_outside = h.nis < h.nis_lower || h.nis > h.nis_upper;
     window_.emplace_back(update.nis, update.channels);
     while (static_cast<int>(window_.size()) > settings_.nis_window) window_.pop_front();
@@ -70,20 +106,15 @@ HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const Foreca
     }
     const double count = static_cast<double>(window_.size());
     h.nis_window_mean = sum / count;
-    h.window_lower = chiSquareQuantile(tail, dof) / count;
-    h.window_upper = chiSquareQuantile(1.0 - tail, dof) / count;
+    h.window_lower = nisBound(false, dof) / count;
+    h.window_upper = nisBound(true, dof) / count;
     // Judge only a full window: a few samples say little about calibration.
     h.nis_window_outside = static_cast<int>(window_.size()) == settings_.nis_window &&
                            (h.nis_window_mean < h.window_lower || h.nis_window_mean > h.window_upper);
   }
   h.mass_outside_support = Eigen::VectorXd::Zero(coeffs.rows());
   if (!h.non_finite) {
-    const Eigen::MatrixXd values = psi_ * coeffs.transpose();  // draws x parameters
-    for (Eigen::Index i = 0; i < coeffs.rows(); ++i) {
-      const auto v = values.col(i).array();
-      h.mass_outside_support[i] =
-          ((v < lower_[i]) || (v > upper_[i])).cast<double>().mean();
-    }
+    for (Eigen::Index i = 0; i < coeffs.rows(); ++i) h.mass_outside_support[i] = massOutside(coeffs, i);
     h.support_exceeded = (h.mass_outside_support.array() > settings_.support_mass_limit).any();
     const Eigen::VectorXd mean = pcMean(coeffs), sd = pcStddev(coeffs);
     if (last_mean_.size() == mean.size()) {
@@ -95,7 +126,6 @@ HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const Foreca
   }
   return h;
 }
-
 Eigen::VectorXd coherenceDisagreement(const Eigen::VectorXd& mean_full,
                                       const Eigen::VectorXd& std_full,
                                       const Eigen::VectorXd& mean_decimated,

@@ -50,9 +50,17 @@ class HealthMonitor {
   void reset();
 
  private:
+  // Cached chi-square bounds by degrees of freedom (quantiles are iterative).
+  double nisBound(bool upper, int dof);
+  // Fraction of the germ draws whose value lies outside [lower_i, upper_i].
+  double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i);
+
   HealthSettings settings_;
-  Eigen::MatrixXd psi_;  // support_draws x S basis values at fixed germ samples
+  Eigen::MatrixXd psi_;           // support_draws x S basis values at fixed germ samples
+  Eigen::VectorXd psi_max_abs_;   // per term, max over the draws of |psi_j|
+  Eigen::VectorXd values_;        // support_draws, reused
   Eigen::VectorXd lower_, upper_;
+  std::vector<double> bound_cache_[2];  // [lower, upper][dof], NaN = not yet computed
   std::deque<std::pair<double, int>> window_;  // (nis, channels)
   Eigen::VectorXd last_mean_, last_std_;
 };

@@ -29,13 +29,14 @@ UpdateDiagnostics prepare(const Eigen::MatrixXd& x, const Eigen::MatrixXd& zc,
   return d;
 }
 
-// NIS by Woodbury: v^T (Y Y^T + R)^-1 v = v^T R^-1 v - b^T (I + Y^T R^-1 Y)^-1 b, b = Y^T R^-1 v.
-double woodburyNis(const Eigen::MatrixXd& y, const Eigen::VectorXd& rinv, const Eigen::VectorXd& v,
-                   const Eigen::LLT<Eigen::MatrixXd>& inner) {
-  const Eigen::VectorXd rv = rinv.cwiseProduct(v);
-  const Eigen::VectorXd b = y.transpose() * rv;
-  return v.dot(rv) - b.dot(inner.solve(b));
-}
+// Buffers of pcKalmanUpdate, per thread: the one-step filter calls it at
+// every sample with the same sizes, so after the first call it allocates nothing.
+struct UpdateWork {
+  Eigen::VectorXd rinv, rv, b, weights, s, ts, mean_z, gain_a, gain_y;
+  Eigen::MatrixXd c, transform, a, szz, yc;
+  Eigen::LLT<Eigen::MatrixXd> inner;
+  Eigen::LDLT<Eigen::MatrixXd> innovation_cov;
+};
 
 }  // namespace
 
@@ -46,40 +47,82 @@ UpdateDiagnostics pcKalmanUpdate(Eigen::MatrixXd& x, const Eigen::MatrixXd& z_co
   const Eigen::Index k = z.size(), m = x.cols() - 1;
   if (!d.finite || k == 0) return d;
   const auto y = z_coeffs.rightCols(m);
-  const Eigen::VectorXd rinv = r.cwiseInverse();
+  thread_local UpdateWork w;
+  w.rinv = r.cwiseInverse();
+  w.rv = w.rinv.cwiseProduct(d.innovation);
   // C = Y^T R^-1 Y, G = (I + C)^-1: the posterior covariance of the higher
-  // coefficients' weights (P_a = A G A^T for the joint update).
-  Eigen::MatrixXd c = y.transpose() * rinv.asDiagonal() * y;
-  Eigen::MatrixXd inner = Eigen::MatrixXd::Identity(m, m) + c;
-  const Eigen::LLT<Eigen::MatrixXd> llt(inner);
-  d.nis = woodburyNis(y, rinv, d.innovation, llt);
+  // coefficients' weights (P_a = A G A^T for the joint update). Needed by the
+  // paper rule, and for the NIS when there are more observations than terms.
+  const bool weight_space = rule == UpdateRule::kPaper || k > m;
+  if (weight_space) {
+    w.c.noalias() = y.transpose() * w.rinv.asDiagonal() * y;
+    w.c.diagonal().array() += 1.0;
+    w.inner.compute(w.c);
+    // NIS by Woodbury: v^T (Y Y^T + R)^-1 v = v^T R^-1 v - b^T (I + C)^-1 b, b = Y^T R^-1 v.
+    w.b.noalias() = y.transpose() * w.rv;
+    d.nis = d.innovation.dot(w.rv) - w.b.dot(w.inner.solve(w.b));
+  } else {
+    // Few observations: v^T (Y Y^T + R)^-1 v directly, a k x k solve.
+    w.szz.noalias() = y * y.transpose();
+    w.szz.diagonal() += r;
+    w.innovation_cov.compute(w.szz);
+    d.nis = d.innovation.dot(w.innovation_cov.solve(d.innovation));
+  }
 
-  Eigen::MatrixXd transform;  // A <- A T
-  Eigen::VectorXd weights;    // X_1 <- X_1 + A w
+  // A <- A T, X_1 <- X_1 + A w.
   if (rule == UpdateRule::kPaper) {
     // K = A G Y^T R^-1 (push-through); A - K Y = A (I - G C) = A G.
-    weights = llt.solve(y.transpose() * rinv.cwiseProduct(d.innovation));
-    transform = llt.solve(Eigen::MatrixXd::Identity(m, m));
+    w.weights = w.inner.solve(w.b);
+    w.transform = w.inner.solve(Eigen::MatrixXd::Identity(m, m));
+  } else if (k <= m) {
+    // Few observations (one sample's channels): the serial scalar square root
+    // (Whitaker & Hamill 2002) applied directly to A and to the remaining
+    // channels' Y, O((rows + k) k S) with no S x S transform.
+    w.a = x.rightCols(m);
+    w.yc = y;
+    w.mean_z = z_coeffs.col(0);
+    w.gain_a.resize(x.rows());
+    w.gain_y.resize(k);
+    for (Eigen::Index ch = 0; ch < k; ++ch) {
+      const auto s = w.yc.row(ch);
+      const double denom = s.squaredNorm() + r[ch];
+      const double residual = z[ch] - w.mean_z[ch];
+      w.gain_a.noalias() = w.a * s.transpose();
+      w.gain_y.noalias() = w.yc * s.transpose();
+      w.gain_a /= denom;
+      w.gain_y /= denom;
+      x.col(0) += w.gain_a * residual;
+      w.mean_z += w.gain_y * residual;
+      const double alpha = 1.0 / (1.0 + std::sqrt(r[ch] / denom));
+      w.s = alpha * s.transpose();
+      w.a.noalias() -= w.gain_a * w.s.transpose();
+      w.yc.noalias() -= w.gain_y * w.s.transpose();
+    }
+    x.rightCols(m) = w.a;
+    d.finite = x.allFinite() && std::isfinite(d.nis);
+    return d;
   } else {
     // Serial scalar square root (Whitaker & Hamill 2002) carried out on the
-    // weights: after channel c, A_c = A T and Z_c = Z_1 + Y w, Y T.
-    transform = Eigen::MatrixXd::Identity(m, m);
-    weights = Eigen::VectorXd::Zero(m);
-    Eigen::VectorXd s(m), ts(m);
+    // weights: after channel c, A_c = A T and Z_c = Z_1 + Y w, Y T (many
+    // observations: the whole-set update's 4N).
+    w.transform.setIdentity(m, m);
+    w.weights.setZero(m);
+    w.s.resize(m);
+    w.ts.resize(m);
     for (Eigen::Index ch = 0; ch < k; ++ch) {
-      s.noalias() = transform.transpose() * y.row(ch).transpose();  // current Y row
-      const double var = s.squaredNorm();
+      w.s.noalias() = w.transform.transpose() * y.row(ch).transpose();  // current Y row
+      const double var = w.s.squaredNorm();
       const double denom = var + r[ch];
-      const double residual = d.innovation[ch] - y.row(ch).dot(weights);
-      ts.noalias() = transform * s;
-      weights += ts * (residual / denom);
+      const double residual = d.innovation[ch] - y.row(ch).dot(w.weights);
+      w.ts.noalias() = w.transform * w.s;
+      w.weights += w.ts * (residual / denom);
       const double alpha = 1.0 / (1.0 + std::sqrt(r[ch] / denom));
-      transform.noalias() -= (alpha / denom) * ts * s.transpose();
+      w.transform.noalias() -= (alpha / denom) * w.ts * w.s.transpose();
     }
   }
-  const Eigen::MatrixXd a = x.rightCols(m);
-  x.col(0) += a * weights;
-  x.rightCols(m) = a * transform;
+  w.a = x.rightCols(m);
+  x.col(0).noalias() += w.a * w.weights;
+  x.rightCols(m).noalias() = w.a * w.transform;
   d.finite = x.allFinite() && std::isfinite(d.nis);
   return d;
 }

@@ -56,12 +56,13 @@ StepResult OneStepFilter::process(const Measurement& m) {
   r.time = m.time;
   const int ns = propagator_->stateCount();
   if (!m.channels.empty() && r.forecast.ok) {
-    Eigen::MatrixXd h(m.channels.size(), ns);
+    // Observation coefficients Z = H X_y of the observed channels.
+    z_coeffs_.resize(static_cast<Eigen::Index>(m.channels.size()), x_.cols());
     for (std::size_t i = 0; i < m.channels.size(); ++i) {
-      h.row(i) = model.observationMatrix().row(m.channels[i]);
+      z_coeffs_.row(i).noalias() =
+          model.observationMatrix().row(m.channels[i]).lazyProduct(x_.topRows(ns));
     }
-    const Eigen::MatrixXd z_coeffs = h * x_.topRows(ns);
-    r.update = pcKalmanUpdate(x_, z_coeffs, m.values, settings_.noise.variances(m.values),
+    r.update = pcKalmanUpdate(x_, z_coeffs_, m.values, settings_.noise.variances(m.values),
                               settings_.rule);
   } else {
     r.update.finite = x_.allFinite();

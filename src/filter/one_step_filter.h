@@ -51,6 +51,7 @@ class OneStepFilter {
   OneStepSettings settings_;
   HealthMonitor health_;
   Eigen::MatrixXd x_;
+  Eigen::MatrixXd z_coeffs_;  // per-sample buffer
   double t_ = 0.0;
   int samples_ = 0;
 };

@@ -1,6 +1,7 @@
 #include "filter/pc_propagator.h"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 
@@ -24,6 +25,9 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
       settings_(settings) {
   if (design_.termCount() != basis_.size()) {
     throw std::invalid_argument("PcPropagator: design and basis sizes differ");
+  }
+  for (const UncertainParameter& u : mapping_.uncertain()) {
+    full_index_.push_back(model_->parameterIndex(u.name));  // valid: checked by the mapping
   }
 }
 
@@ -77,55 +81,147 @@ Eigen::MatrixXd PcPropagator::project(const Eigen::MatrixXd& values, const std::
   return cod.solve(v).transpose();
 }
 
+namespace {
+
+// Per-thread buffers of forecast(): the per-sample path allocates nothing once
+// they have their size (the propagator is shared, e.g. by the node's filters).
+struct ForecastWork {
+  Eigen::MatrixXd at_points;  // (states + parameters) x Q
+  Eigen::MatrixXd params;     // model parameters x Q
+  Eigen::ArrayXXd y;          // states x (usable points)
+  std::vector<std::string> reasons;
+  std::vector<bool> usable;
+  std::vector<Eigen::Index> cols;
+};
+
+// dst (m x n, column-major) = a (m x k, column-major, leading dimension m) * b,
+// b(l, j) = b[l * b_row_stride + j * b_col_stride]: the per-sample products
+// X A^T and Y P^T (m = 8 to 12 rows: the column of dst stays in registers),
+// where Eigen's blocked GEMM spends more on packing than on arithmetic.
+template <int M>
+__attribute__((always_inline)) inline void smallProductRows(
+    const double* __restrict a, const double* __restrict b, Eigen::Index b_row_stride,
+    Eigen::Index b_col_stride, double* __restrict dst, Eigen::Index k, Eigen::Index n) {
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double acc[M] = {};
+    for (Eigen::Index l = 0; l < k; ++l) {
+      const double blj = b[l * b_row_stride + j * b_col_stride];
+      for (int i = 0; i < M; ++i) acc[i] += a[l * M + i] * blj;
+    }
+    for (int i = 0; i < M; ++i) dst[j * M + i] = acc[i];
+  }
+}
+
+// Compiled for x86-64-v3 and the baseline.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void smallProduct(
+    const double* __restrict a, const double* __restrict b, Eigen::Index b_row_stride,
+    Eigen::Index b_col_stride, double* __restrict dst, Eigen::Index m, Eigen::Index k,
+    Eigen::Index n) {
+  switch (m) {
+    case 8: return smallProductRows<8>(a, b, b_row_stride, b_col_stride, dst, k, n);
+    case 9: return smallProductRows<9>(a, b, b_row_stride, b_col_stride, dst, k, n);
+    case 10: return smallProductRows<10>(a, b, b_row_stride, b_col_stride, dst, k, n);
+    case 11: return smallProductRows<11>(a, b, b_row_stride, b_col_stride, dst, k, n);
+    case 12: return smallProductRows<12>(a, b, b_row_stride, b_col_stride, dst, k, n);
+    default: break;
+  }
+  for (Eigen::Index j = 0; j < n; ++j) {
+    double* __restrict d = dst + j * m;
+    for (Eigen::Index i = 0; i < m; ++i) d[i] = 0.0;
+    for (Eigen::Index l = 0; l < k; ++l) {
+      const double blj = b[l * b_row_stride + j * b_col_stride];
+      const double* __restrict al = a + l * m;
+      for (Eigen::Index i = 0; i < m; ++i) d[i] += al[i] * blj;
+    }
+  }
+}
+
+// All entries finite, in one vectorised pass (x * 0 is NaN for NaN and +-Inf).
+template <typename Derived>
+bool finite(const Eigen::DenseBase<Derived>& m) {
+  return std::isfinite((m.derived().array() * 0.0).sum());
+}
+
+}  // namespace
+
 ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) const {
   ForecastReport report;
   report.points = design_.pointCount();
   if (t1 < t0) throw std::invalid_argument("forecast: t1 < t0");
   if (t1 == t0) return report;
   const int ns = stateCount(), np = parameterCount();
-  std::vector<std::string> reasons;
-  const Eigen::MatrixXd params = parametersAtPoints(x.bottomRows(np), &reasons);
-  const Eigen::MatrixXd states = design_.evaluateAtPoints(x.topRows(ns));
-
-  std::vector<bool> usable(params.cols(), true);
-  std::vector<Eigen::Index> cols;
-  for (Eigen::Index q = 0; q < params.cols(); ++q) {
-    if (reasons[q].empty() && params.col(q).allFinite() && states.col(q).allFinite()) {
-      cols.push_back(q);
+  const Eigen::Index q_count = design_.pointCount();
+  thread_local ForecastWork w;
+  // States and parameters at the points in one product: X A^T.
+  // X A^T: A is Q x S column-major, so (A^T)(l, q) = A[q + l Q].
+  const Eigen::MatrixXd& design = design_.designMatrix();
+  w.at_points.resize(x.rows(), q_count);
+  smallProduct(x.data(), design.data(), q_count, 1, w.at_points.data(), x.rows(), x.cols(),
+               q_count);
+  // Full model parameters at the points: nominal values, uncertain rows replaced.
+  // (Column copies: Eigen's replicate() divides per element.)
+  const Eigen::VectorXd& nominal = model_->nominalParameters();
+  w.params.resize(nominal.size(), q_count);
+  for (Eigen::Index q = 0; q < q_count; ++q) w.params.col(q) = nominal;
+  for (int i = 0; i < np; ++i) w.params.row(full_index_[i]) = w.at_points.row(ns + i);
+  const Eigen::MatrixXd& params = w.params;
+  w.reasons.resize(q_count);
+  w.usable.assign(q_count, true);
+  w.cols.clear();
+  const bool all_finite = finite(params) && finite(w.at_points.topRows(ns));
+  for (Eigen::Index q = 0; q < q_count; ++q) {
+    w.reasons[q] = model_->invalidReason(params.col(q));
+    if (w.reasons[q].empty() &&
+        (all_finite || (params.col(q).allFinite() && w.at_points.col(q).head(ns).allFinite()))) {
+      w.cols.push_back(q);
       continue;
     }
-    usable[q] = false;
+    w.usable[q] = false;
     ++report.invalid_points;
     if (report.first_problem.empty()) {
       report.first_problem = "collocation point " + std::to_string(q) + ": " +
-                             (reasons[q].empty() ? "non-finite state" : reasons[q]);
+                             (w.reasons[q].empty() ? "non-finite state" : w.reasons[q]);
     }
   }
-  Eigen::MatrixXd valid_params(params.rows(), cols.size());
-  Eigen::ArrayXXd y(ns, cols.size());
-  for (std::size_t i = 0; i < cols.size(); ++i) {
-    valid_params.col(i) = params.col(cols[i]);
-    y.col(i) = states.col(cols[i]).array();
+  const Eigen::Index valid = static_cast<Eigen::Index>(w.cols.size());
+  w.y.resize(ns, valid);
+  if (valid == q_count) {
+    w.y = w.at_points.topRows(ns).array();
+  } else {
+    for (Eigen::Index i = 0; i < valid; ++i) w.y.col(i) = w.at_points.col(w.cols[i]).head(ns).array();
   }
-  if (!cols.empty()) {
-    const auto batch = model_->prepare(valid_params);
-    integrate(*model_, *batch, t0, t1, y, settings_);
-    integrations_ += static_cast<long>(cols.size());
+  if (valid > 0) {
+    const auto batch = valid == q_count ? model_->prepare(params)
+                                        : model_->prepare(params(Eigen::all, w.cols));
+    integrate(*model_, *batch, t0, t1, w.y, settings_);
+    integrations_ += static_cast<long>(valid);
   }
-  Eigen::MatrixXd propagated = Eigen::MatrixXd::Zero(ns, params.cols());
-  for (std::size_t i = 0; i < cols.size(); ++i) {
-    if (!y.col(i).allFinite()) {
-      usable[cols[i]] = false;
-      ++report.nonfinite_points;
-      if (report.first_problem.empty()) {
-        report.first_problem = "collocation point " + std::to_string(cols[i]) +
-                               ": integration not finite";
-      }
-      continue;
+  const bool integrated_finite = finite(w.y);
+  for (Eigen::Index i = 0; i < valid && !integrated_finite; ++i) {
+    if (w.y.col(i).allFinite()) continue;
+    w.usable[w.cols[i]] = false;
+    ++report.nonfinite_points;
+    if (report.first_problem.empty()) {
+      report.first_problem =
+          "collocation point " + std::to_string(w.cols[i]) + ": integration not finite";
     }
-    propagated.col(cols[i]) = y.col(i).matrix();
   }
-  x.topRows(ns) = project(propagated, usable, &report);
+  if (report.invalid_points == 0 && report.nonfinite_points == 0) {
+    // Every point usable: the precomputed projector.
+    // Y P^T: P is S x Q column-major, so (P^T)(q, j) = P[j + q S].
+    const Eigen::MatrixXd& projector = design_.projector();
+    const Eigen::Index s_count = projector.rows();
+    w.at_points.resize(ns, s_count);
+    smallProduct(w.y.data(), projector.data(), s_count, 1, w.at_points.data(), ns, q_count,
+                 s_count);
+    x.topRows(ns) = w.at_points;
+    return report;
+  }
+  Eigen::MatrixXd propagated = Eigen::MatrixXd::Zero(ns, q_count);
+  for (Eigen::Index i = 0; i < valid; ++i) {
+    if (w.usable[w.cols[i]]) propagated.col(w.cols[i]) = w.y.col(i).matrix();
+  }
+  x.topRows(ns) = project(propagated, w.usable, &report);
   return report;
 }
 

@@ -65,6 +65,7 @@ class PcPropagator {
   CollocationDesign design_;
   ParameterMapping mapping_;
   IntegratorSettings settings_;
+  std::vector<int> full_index_;  // model parameter index of each uncertain parameter
   mutable long integrations_ = 0;  // point-intervals integrated (cost accounting)
 };
 

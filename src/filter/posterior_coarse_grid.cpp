@@ -77,7 +77,7 @@ CoarseGridCache::CoarseGridCache(const MechanicalModel& model, const ParameterMa
                                  int coarse_points, int threads, const PosteriorProgress& progress)
     : uncertain_(mapping.uncertain()),
       times_(std::move(times)),
-      max_step_(integration.max_step),
+      integration_(integration),
       grid_(PriorDensity(mapping.germs()), coarse_points) {
   const Eigen::Index channels = model.observationMatrix().rows();
   channels_.assign(
@@ -122,8 +122,11 @@ void CoarseGridCache::checkCompatible(const ParameterMapping& mapping,
     }
   }
   if (times != times_) throw std::invalid_argument("CoarseGridCache: sample times differ");
-  if (integration.max_step != max_step_) {
+  if (integration.max_step != integration_.max_step) {
     throw std::invalid_argument("CoarseGridCache: integration max_step differs");
+  }
+  if (integration.method != integration_.method) {
+    throw std::invalid_argument("CoarseGridCache: integration method differs");
   }
   if (coarse_points != grid_.pointsPerAxis()) {
     throw std::invalid_argument("CoarseGridCache: built with " +

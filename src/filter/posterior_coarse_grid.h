@@ -68,7 +68,7 @@ class CoarseGridCache {
  private:
   std::vector<UncertainParameter> uncertain_;
   std::vector<double> times_;
-  double max_step_;
+  IntegratorSettings integration_;
   CoarseGrid grid_;
   std::vector<Eigen::MatrixXd> channels_;
   long simulations_ = 0;

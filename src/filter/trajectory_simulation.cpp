@@ -6,24 +6,42 @@
 
 namespace pc_ekf {
 
+namespace {
+
+// Columns integrated together: enough for the vectorised right-hand side, few
+// enough that the integrator's stage arrays stay in the first-level caches
+// (measured: 1024 columns at once cost twice as much per column as 64).
+constexpr Eigen::Index kColumnBlock = 64;
+
+}  // namespace
+
 std::vector<Eigen::MatrixXd> simulateChannels(const MechanicalModel& model,
                                               const Eigen::MatrixXd& params,
                                               const std::vector<double>& times,
                                               const IntegratorSettings& settings) {
-  std::vector<Eigen::MatrixXd> out;
-  out.reserve(times.size());
-  if (params.cols() == 0) {
-    out.assign(times.size(), Eigen::MatrixXd(model.observationMatrix().rows(), 0));
-    return out;
+  const Eigen::Index channels = model.observationMatrix().rows(), q = params.cols();
+  if (q == 0) return std::vector<Eigen::MatrixXd>(times.size(), Eigen::MatrixXd(channels, 0));
+  for (std::size_t k = 1; k < times.size(); ++k) {
+    if (times[k] < times[k - 1]) {
+      throw std::invalid_argument("simulateChannels: sample times must not decrease");
+    }
   }
-  const auto batch = model.prepare(params);
-  Eigen::ArrayXXd y = batch->initialState();
-  double t = 0.0;
-  for (double tk : times) {
-    if (tk < t) throw std::invalid_argument("simulateChannels: sample times must not decrease");
-    integrate(model, *batch, t, tk, y, settings);
-    t = tk;
-    out.push_back(model.observationMatrix() * y.matrix());
+  if (!times.empty() && times.front() < 0.0) {
+    throw std::invalid_argument("simulateChannels: sample times must not decrease");
+  }
+  std::vector<Eigen::MatrixXd> out(times.size(), Eigen::MatrixXd(channels, q));
+  // Each column's trajectory does not depend on the others (integrate()), so
+  // blocks of columns give the same values as one batch.
+  for (Eigen::Index begin = 0; begin < q; begin += kColumnBlock) {
+    const Eigen::Index cols = std::min(kColumnBlock, q - begin);
+    const auto batch = model.prepare(params.middleCols(begin, cols));
+    Eigen::ArrayXXd y = batch->initialState();
+    double t = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      integrate(model, *batch, t, times[k], y, settings);
+      t = times[k];
+      out[k].middleCols(begin, cols).noalias() = model.observationMatrix() * y.matrix();
+    }
   }
   return out;
 }

@@ -31,7 +31,9 @@ std::vector<std::string> ParameterMapping::names() const {
 }
 
 Eigen::MatrixXd ParameterMapping::fullParameters(const Eigen::MatrixXd& theta) const {
-  Eigen::MatrixXd full = nominal_full_.replicate(1, theta.cols());
+  // Column copies rather than replicate(), which divides per element.
+  Eigen::MatrixXd full(nominal_full_.size(), theta.cols());
+  for (Eigen::Index q = 0; q < theta.cols(); ++q) full.col(q) = nominal_full_;
   for (int i = 0; i < count(); ++i) full.row(index_[i]) = theta.row(i);
   return full;
 }

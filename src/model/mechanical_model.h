@@ -21,6 +21,16 @@ class ModelBatch {
   virtual void derivatives(double t, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const = 0;
   // Initial state of every point at t = 0 (stateSize() x pointCount()).
   virtual Eigen::ArrayXXd initialState() const = 0;
+
+  // Optional structure-of-arrays form, used by integrate() when
+  // hasTransposedDerivatives(): y_t and dydt_t are pointCount() x stateSize()
+  // (one contiguous column per state variable), so a model can vectorise its
+  // right-hand side across the points. Values must equal those of
+  // derivatives() up to rounding and must not depend on the other points of
+  // the batch. The default transposes and calls derivatives().
+  virtual bool hasTransposedDerivatives() const { return false; }
+  virtual void derivativesTransposed(double t, const Eigen::ArrayXXd& y_t,
+                                     Eigen::ArrayXXd& dydt_t) const;
 };
 
 class MechanicalModel {

@@ -1,6 +1,7 @@
 // Roll-plane vehicle model (SPEC §1): parameter checks and batched right-hand side.
 #include "model/roll_plane_model.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -12,41 +13,196 @@ namespace pc_ekf {
 
 namespace {
 
-// Per-point constants, one array per quantity (structure of arrays over the Q points),
-// so derivatives() does no equilibrium or parameter work.
-struct PointConstants {
-  Eigen::ArrayXd k[2], k3[2];        // spring law
-  Eigen::ArrayXd three_delta[2];     // 3 delta_i
-  Eigen::ArrayXd three_delta_sq[2];  // 3 delta_i^2
-  Eigen::ArrayXd damping[2];         // c (linear) or c * tanh scale
-  Eigen::ArrayXd tyre[2], inv_unsprung[2];
-  Eigen::ArrayXd inv_total_mass;                       // 1 / (m + M)
-  Eigen::ArrayXd roll_gain;                            // L / I_cg
-  Eigen::ArrayXd cg, rear_arm, cg_ratio;               // D, L - D, D / L
-  Eigen::ArrayXd inv_length;                           // 1 / L
-  Eigen::ArrayXd roll_static, cos_static, sin_static;  // theta_s, cos and sin of it
+// Raw views of the per-point constants for the vectorised loop, one array per
+// quantity (structure of arrays over the Q points), so the right-hand side
+// does no equilibrium or parameter work.
+struct ConstantPointers {
+  const double *k[2], *k3[2];        // spring law
+  const double *three_delta[2];      // 3 delta_i
+  const double *three_delta_sq[2];   // 3 delta_i^2
+  const double *damping[2];          // c (linear) or c * tanh scale
+  const double *tyre[2], *inv_unsprung[2];
+  const double *inv_total_mass;                       // 1 / (m + M)
+  const double *roll_gain;                            // L / I_cg
+  const double *cg, *rear_arm, *cg_ratio;             // D, L - D, D / L
+  const double *inv_length;                           // 1 / L
+  const double *roll_static, *cos_static, *sin_static;  // theta_s, cos and sin of it
+};
 
-  void resize(int q) {
+// The constants in one Q x kCount table (one allocation per prepare()).
+struct PointConstants {
+  enum Column {
+    kK = 0, kK3 = 2, kThreeDelta = 4, kThreeDeltaSq = 6, kDamping = 8, kTyre = 10,
+    kInvUnsprung = 12, kInvTotalMass = 14, kRollGain, kCg, kRearArm, kCgRatio, kInvLength,
+    kRollStatic, kCosStatic, kSinStatic, kCount
+  };
+  Eigen::ArrayXXd table;
+
+  explicit PointConstants(Eigen::Index q) : table(q, kCount) {}
+  double& operator()(Eigen::Index q, int column) { return table(q, column); }
+  Eigen::Index size() const { return table.rows(); }
+  ConstantPointers pointers() const {
+    const auto col = [this](int c) { return table.col(c).data(); };
+    ConstantPointers p;
     for (int i = 0; i < 2; ++i) {
-      for (Eigen::ArrayXd* a : {&k[i], &k3[i], &three_delta[i], &three_delta_sq[i], &damping[i],
-                                &tyre[i], &inv_unsprung[i]}) {
-        a->resize(q);
-      }
+      p.k[i] = col(kK + i);
+      p.k3[i] = col(kK3 + i);
+      p.three_delta[i] = col(kThreeDelta + i);
+      p.three_delta_sq[i] = col(kThreeDeltaSq + i);
+      p.damping[i] = col(kDamping + i);
+      p.tyre[i] = col(kTyre + i);
+      p.inv_unsprung[i] = col(kInvUnsprung + i);
     }
-    for (Eigen::ArrayXd* a : {&inv_total_mass, &roll_gain, &cg, &rear_arm, &cg_ratio, &inv_length,
-                              &roll_static, &cos_static, &sin_static}) {
-      a->resize(q);
-    }
+    p.inv_total_mass = col(kInvTotalMass);
+    p.roll_gain = col(kRollGain);
+    p.cg = col(kCg);
+    p.rear_arm = col(kRearArm);
+    p.cg_ratio = col(kCgRatio);
+    p.inv_length = col(kInvLength);
+    p.roll_static = col(kRollStatic);
+    p.cos_static = col(kCosStatic);
+    p.sin_static = col(kSinStatic);
+    return p;
   }
 };
+
+// F_K(delta) - F_K(delta - u) expanded so that it is exactly 0 at u = 0 (SPEC §1.4).
+inline double springIncrement(double u, double k, double k3, double three_delta,
+                              double three_delta_sq) {
+  return u * (k + k3 * (three_delta_sq - three_delta * u + u * u));
+}
+
+// Paper eq. 40-41 solved for the body-end accelerations, and eq. 42-43. `lever`
+// is cos(theta_s + theta). Shared by the per-point and the vectorised loops so
+// both give the same bits.
+struct Accelerations {
+  double body[2], wheel[2];
+};
+inline Accelerations accelerations(const ConstantPointers& c, Eigen::Index q, const double f[2],
+                                   double lever, double road0, double road1, double xr1,
+                                   double xr2) {
+  const double a_cg = (f[0] + f[1]) * c.inv_total_mass[q];
+  const double rel = lever * c.roll_gain[q] * (c.rear_arm[q] * f[1] - c.cg[q] * f[0]);  // x2dd - x1dd
+  const double a1 = a_cg - rel * c.cg_ratio[q];
+  Accelerations a;
+  a.body[0] = a1;
+  a.body[1] = a1 + rel;
+  a.wheel[0] = (c.tyre[0][q] * (road0 - xr1) - f[0]) * c.inv_unsprung[0][q];
+  a.wheel[1] = (c.tyre[1][q] * (road1 - xr2) - f[1]) * c.inv_unsprung[1][q];
+  return a;
+}
+
+template <DamperLaw law>
+inline double damperForce(double damping, double tanh_rate, double v) {
+  return law == DamperLaw::kTanh ? damping * fastTanh(tanh_rate * v) : damping * v;
+}
+
+// One point, state s[8] -> d[8] (any strides); cos by cosOfSum (library beyond the series).
+template <DamperLaw law>
+inline void pointDerivatives(const ConstantPointers& c, Eigen::Index q, double tanh_rate,
+                             double road0, double road1, const double* s, Eigen::Index s_stride,
+                             double* d, Eigen::Index d_stride) {
+  double f[2];
+  for (int i = 0; i < 2; ++i) {
+    const double u = s[i * s_stride] - s[(2 + i) * s_stride];
+    const double v = s[(4 + i) * s_stride] - s[(6 + i) * s_stride];
+    f[i] = -springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q], c.three_delta_sq[i][q]) -
+           damperForce<law>(c.damping[i][q], tanh_rate, v);
+  }
+  const double theta = (s[s_stride] - s[0]) * c.inv_length[q];
+  const double lever = cosOfSum(c.roll_static[q], c.cos_static[q], c.sin_static[q], theta);
+  const Accelerations a =
+      accelerations(c, q, f, lever, road0, road1, s[2 * s_stride], s[3 * s_stride]);
+  for (int i = 0; i < 4; ++i) d[i * d_stride] = s[(4 + i) * s_stride];
+  d[4 * d_stride] = a.body[0];
+  d[5 * d_stride] = a.body[1];
+  d[6 * d_stride] = a.wheel[0];
+  d[7 * d_stride] = a.wheel[1];
+}
+
+// All points, structure of arrays: y and d hold state variable s of point q at
+// [s * n + q]. Three passes, each short enough to vectorise without register
+// spills: (1) velocities -> d[0..3], damper arguments -> d[4..5] (scratch);
+// (2) tanh in place over those 2n values; (3) forces and accelerations ->
+// d[4..7]. Branch-free (the cos series for every point); returns whether any
+// point has |theta| > 0.25 rad, which the caller then redoes with
+// pointDerivatives.
+template <DamperLaw law>
+__attribute__((always_inline)) inline bool soaDerivatives(const ConstantPointers& constants,
+                                                         double tanh_rate, double road0,
+                                                         double road1, const double* __restrict y,
+                                                         double* __restrict d, Eigen::Index n) {
+  const ConstantPointers c = constants;  // a local copy: its pointers are loop-invariant
+  // Outputs never alias inputs or constants (separate arrays).
+#pragma GCC ivdep
+  for (Eigen::Index q = 0; q < n; ++q) {
+    for (int i = 0; i < 4; ++i) d[i * n + q] = y[(4 + i) * n + q];
+    for (int i = 0; i < 2; ++i) {
+      const double v = y[(4 + i) * n + q] - y[(6 + i) * n + q];
+      d[(4 + i) * n + q] = law == DamperLaw::kTanh ? tanh_rate * v : v;
+    }
+  }
+  if (law == DamperLaw::kTanh) {
+    double* __restrict t = d + 4 * n;
+    // Slow suspension motion (every |argument| < 0.625, e.g. after the bump):
+    // the rational branch alone; fast motion: the exponential form alone (the
+    // same values as fastTanh either way).
+    long near_zero = 0;
+    for (Eigen::Index j = 0; j < 2 * n; ++j) near_zero += std::abs(t[j]) < 0.625;
+    if (near_zero == 2 * n) {
+      for (Eigen::Index j = 0; j < 2 * n; ++j) t[j] = fastTanhNearZero(t[j]);
+    } else if (near_zero == 0) {  // fast motion (the bump): the exponential form alone
+      for (Eigen::Index j = 0; j < 2 * n; ++j) t[j] = fastTanhFarFromZero(t[j]);
+    } else {
+      for (Eigen::Index j = 0; j < 2 * n; ++j) t[j] = fastTanh(t[j]);
+    }
+  }
+  long beyond_series = 0;
+#pragma GCC ivdep
+  for (Eigen::Index q = 0; q < n; ++q) {
+    double f[2];
+    for (int i = 0; i < 2; ++i) {
+      const double u = y[i * n + q] - y[(2 + i) * n + q];
+      f[i] = -springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q],
+                              c.three_delta_sq[i][q]) -
+             c.damping[i][q] * d[(4 + i) * n + q];
+    }
+    const double theta = (y[n + q] - y[q]) * c.inv_length[q];
+    beyond_series |= !cosOfSumSeriesValid(theta);
+    const double lever = cosOfSumSeries(c.cos_static[q], c.sin_static[q], theta);
+    const Accelerations a = accelerations(c, q, f, lever, road0, road1, y[2 * n + q], y[3 * n + q]);
+    d[4 * n + q] = a.body[0];
+    d[5 * n + q] = a.body[1];
+    d[6 * n + q] = a.wheel[0];
+    d[7 * n + q] = a.wheel[1];
+  }
+  return beyond_series != 0;
+}
+
+// The hot loop of every forecast. Compiled for x86-64-v3 (AVX2 + FMA: 4 points
+// per instruction) and for the baseline, chosen at load time. Within a build
+// every point's value is independent of the batch it is in (the vector body
+// and the remainder loop contract the same expressions).
+__attribute__((target_clones("arch=x86-64-v3", "default"))) bool soaDerivativesDispatch(
+    const ConstantPointers& c, bool tanh_law, double tanh_rate, double road0, double road1,
+    const double* __restrict y, double* __restrict d, Eigen::Index n) {
+  return tanh_law ? soaDerivatives<DamperLaw::kTanh>(c, tanh_rate, road0, road1, y, d, n)
+                  : soaDerivatives<DamperLaw::kLinear>(c, tanh_rate, road0, road1, y, d, n);
+}
 
 class RollPlaneBatch : public ModelBatch {
  public:
   RollPlaneBatch(PointConstants c, DamperLaw law, double tanh_rate,
                  std::shared_ptr<const RoadInput> road)
-      : c_(std::move(c)), law_(law), tanh_rate_(tanh_rate), road_(std::move(road)) {}
+      : c_(std::move(c)),
+        p_(c_.pointers()),
+        law_(law),
+        tanh_rate_(tanh_rate),
+        road_(std::move(road)) {}
+  RollPlaneBatch(const RollPlaneBatch&) = delete;
+  RollPlaneBatch& operator=(const RollPlaneBatch&) = delete;
 
-  int pointCount() const override { return static_cast<int>(c_.cg.size()); }
+  int pointCount() const override { return static_cast<int>(c_.size()); }
 
   Eigen::ArrayXXd initialState() const override {
     return Eigen::ArrayXXd::Zero(8, pointCount());  // equilibrium (SPEC §1.4)
@@ -58,52 +214,47 @@ class RollPlaneBatch : public ModelBatch {
     }
     dydt.resize(8, y.cols());  // no-op when already sized
     const Eigen::Vector2d road = road_->height(t);
-    if (law_ == DamperLaw::kTanh) {
-      evaluate<DamperLaw::kTanh>(road, y, dydt);
-    } else {
-      evaluate<DamperLaw::kLinear>(road, y, dydt);
+    for (Eigen::Index q = 0; q < y.cols(); ++q) {
+      if (law_ == DamperLaw::kTanh) {
+        pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1,
+                                           &dydt(0, q), 1);
+      } else {
+        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1,
+                                             &dydt(0, q), 1);
+      }
+    }
+  }
+
+  bool hasTransposedDerivatives() const override { return true; }
+
+  void derivativesTransposed(double t, const Eigen::ArrayXXd& y,
+                             Eigen::ArrayXXd& dydt) const override {
+    const Eigen::Index n = pointCount();
+    if (y.cols() != 8 || y.rows() != n) {
+      throw std::invalid_argument("RollPlaneModel: transposed batch must be pointCount() x 8");
+    }
+    dydt.resize(n, 8);  // no-op when already sized
+    const Eigen::Vector2d road = road_->height(t);
+    const bool beyond_series = soaDerivativesDispatch(p_, law_ == DamperLaw::kTanh, tanh_rate_,
+                                                      road[0], road[1], y.data(), dydt.data(), n);
+    if (!beyond_series) return;
+    // Rolls beyond the series' range (wild parameters, diverging points): redo
+    // those points with the library cos.
+    for (Eigen::Index q = 0; q < n; ++q) {
+      if (cosOfSumSeriesValid((y(q, 1) - y(q, 0)) * p_.inv_length[q])) continue;
+      if (law_ == DamperLaw::kTanh) {
+        pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], &y(q, 0), n,
+                                           &dydt(q, 0), n);
+      } else {
+        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road[0], road[1], &y(q, 0), n,
+                                             &dydt(q, 0), n);
+      }
     }
   }
 
  private:
-  template <DamperLaw law>
-  void evaluate(const Eigen::Vector2d& road, const Eigen::ArrayXXd& y,
-                Eigen::ArrayXXd& dydt) const {
-    const PointConstants& c = c_;
-    for (Eigen::Index q = 0; q < y.cols(); ++q) {
-      const double* s = &y(0, q);
-      double* d = &dydt(0, q);
-      double f[2];
-      for (int i = 0; i < 2; ++i) {
-        const double u = s[i] - s[2 + i];
-        const double v = s[4 + i] - s[6 + i];
-        // F_K(delta) - F_K(delta - u) expanded so that it is exactly 0 at u = 0 (SPEC §1.4).
-        const double spring =
-            u *
-            (c.k[i][q] + c.k3[i][q] * (c.three_delta_sq[i][q] - c.three_delta[i][q] * u + u * u));
-        const double damper = law == DamperLaw::kTanh ? c.damping[i][q] * fastTanh(tanh_rate_ * v)
-                                                      : c.damping[i][q] * v;
-        f[i] = -spring - damper;
-      }
-      // Paper eq. 40-41 solved for the body-end accelerations.
-      const double theta = (s[1] - s[0]) * c.inv_length[q];
-      const double a_cg = (f[0] + f[1]) * c.inv_total_mass[q];
-      const double rel = cosOfSum(c.roll_static[q], c.cos_static[q], c.sin_static[q], theta) *
-                         c.roll_gain[q] * (c.rear_arm[q] * f[1] - c.cg[q] * f[0]);  // x2dd - x1dd
-      const double a1 = a_cg - rel * c.cg_ratio[q];
-      d[0] = s[4];
-      d[1] = s[5];
-      d[2] = s[6];
-      d[3] = s[7];
-      d[4] = a1;
-      d[5] = a1 + rel;
-      // Paper eq. 42-43.
-      d[6] = (c.tyre[0][q] * (road[0] - s[2]) - f[0]) * c.inv_unsprung[0][q];
-      d[7] = (c.tyre[1][q] * (road[1] - s[3]) - f[1]) * c.inv_unsprung[1][q];
-    }
-  }
-
   PointConstants c_;
+  ConstantPointers p_;
   DamperLaw law_;
   double tanh_rate_;
   std::shared_ptr<const RoadInput> road_;
@@ -160,7 +311,30 @@ const std::vector<std::string>& RollPlaneModel::channelNames() const {
   return names;
 }
 
+namespace {
+
+// True when every check of RollPlaneModel::invalidReason passes, evaluated
+// without a branch per entry (it runs for every collocation point twice per
+// forecast). Conservative: false sends the caller to the detailed checks. With
+// a non-negative added mass the combined inertia is >= bar_inertia > 0, and
+// magnitudes below 1e150 keep its formula free of overflow.
+bool plainlyAdmissible(const double* p) {
+  double probe = 0.0, largest = 0.0;
+  for (int i = 0; i < 16; ++i) {
+    probe += p[i] * 0.0;  // NaN for NaN or +-Inf
+    largest = std::max(largest, std::abs(p[i]));
+  }
+  bool ok = std::isfinite(probe) & (largest < 1e150);
+  for (int i : {0, 1, 2, 5, 6, 9, 10, 11, 12, 13}) ok &= p[i] > 0.0;
+  for (int i : {3, 4, 7, 8}) ok &= p[i] >= 0.0;
+  ok &= (p[14] >= 0.0) & (p[14] + p[0] > 0.0) & (p[15] >= 0.0) & (p[15] <= p[9]);
+  return ok;
+}
+
+}  // namespace
+
 std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
+  if (params.size() == 16 && plainlyAdmissible(params.data())) return "";
   const auto& names = vehicleParameterNames();
   if (params.size() != static_cast<Eigen::Index>(names.size())) {
     return "expected " + std::to_string(names.size()) + " parameters, got " +
@@ -199,41 +373,50 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
                                 std::to_string(nominal_vector_.size()) + " parameter rows");
   }
   const int count = static_cast<int>(params.cols());
-  PointConstants c;
-  c.resize(count);
-  const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
+  std::vector<VehicleParameters> points;
+  points.reserve(count);
   for (int q = 0; q < count; ++q) {
     const std::string why = invalidReason(params.col(q));
     if (!why.empty()) {
       throw std::invalid_argument("RollPlaneModel::prepare: column " + std::to_string(q) + ": " +
                                   why);
     }
-    const VehicleParameters p = VehicleParameters::fromVector(params.col(q), nominal_);
-    const StaticEquilibrium e = solveStaticEquilibrium(p);
+    points.push_back(VehicleParameters::fromVector(params.col(q), nominal_));
+  }
+  const std::vector<StaticEquilibrium> equilibria = solveStaticEquilibria(points);
+  PointConstants c(count);
+  using C = PointConstants;
+  const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
+  for (int q = 0; q < count; ++q) {
+    const VehicleParameters& p = points[q];
+    const StaticEquilibrium& e = equilibria[q];
     const double length = p.bar_length, cg = e.combined_cg, total = p.bar_mass + p.added_mass;
     for (int i = 0; i < 2; ++i) {
       const double delta = e.spring_compression[i];
-      c.k[i][q] = p.spring_linear[i];
-      c.k3[i][q] = p.spring_cubic[i];
-      c.three_delta[i][q] = 3.0 * delta;
-      c.three_delta_sq[i][q] = 3.0 * delta * delta;
-      c.damping[i][q] = p.damping[i] * scale;
-      c.tyre[i][q] = p.tyre_stiffness[i];
-      c.inv_unsprung[i][q] = 1.0 / p.unsprung_mass[i];
+      c(q, C::kK + i) = p.spring_linear[i];
+      c(q, C::kK3 + i) = p.spring_cubic[i];
+      c(q, C::kThreeDelta + i) = 3.0 * delta;
+      c(q, C::kThreeDeltaSq + i) = 3.0 * delta * delta;
+      c(q, C::kDamping + i) = p.damping[i] * scale;
+      c(q, C::kTyre + i) = p.tyre_stiffness[i];
+      c(q, C::kInvUnsprung + i) = 1.0 / p.unsprung_mass[i];
     }
     // I_cg = I + m (L/2 - D)^2 + M (D - d_CG)^2 (SPEC §1.4).
     const double inertia =
         p.bar_inertia + p.bar_mass * (0.5 * length - cg) * (0.5 * length - cg) +
         p.added_mass * (cg - p.added_mass_position) * (cg - p.added_mass_position);
-    c.inv_total_mass[q] = 1.0 / total;
-    c.roll_gain[q] = length / inertia;
-    c.cg[q] = cg;
-    c.rear_arm[q] = length - cg;
-    c.cg_ratio[q] = cg / length;
-    c.inv_length[q] = 1.0 / length;
-    c.roll_static[q] = e.roll_angle;
-    c.cos_static[q] = std::cos(e.roll_angle);
-    c.sin_static[q] = std::sin(e.roll_angle);
+    c(q, C::kInvTotalMass) = 1.0 / total;
+    c(q, C::kRollGain) = length / inertia;
+    c(q, C::kCg) = cg;
+    c(q, C::kRearArm) = length - cg;
+    c(q, C::kCgRatio) = cg / length;
+    c(q, C::kInvLength) = 1.0 / length;
+    c(q, C::kRollStatic) = e.roll_angle;
+    // theta_s = atan(s): cos = 1 / sqrt(1 + s^2), sin = s cos (no library sin/cos).
+    const double slope = (e.height[1] - e.height[0]) / length;
+    const double cos_static = 1.0 / std::sqrt(1.0 + slope * slope);
+    c(q, C::kCosStatic) = cos_static;
+    c(q, C::kSinStatic) = slope * cos_static;
   }
   return std::make_unique<RollPlaneBatch>(std::move(c), nominal_.damper, nominal_.damper_tanh_rate,
                                           road_);

@@ -36,7 +36,8 @@ struct VehicleParameters {
   double damper_tanh_rate = 10.0;
 
   Eigen::VectorXd toVector() const;
-  static VehicleParameters fromVector(const Eigen::VectorXd& v, const VehicleParameters& laws);
+  static VehicleParameters fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
+                                      const VehicleParameters& laws);
 };
 
 const std::vector<std::string>& vehicleParameterNames();
@@ -51,6 +52,9 @@ struct StaticEquilibrium {
 };
 // Newton on the cubic spring law; throws std::runtime_error if it fails to converge.
 StaticEquilibrium solveStaticEquilibrium(const VehicleParameters& p);
+// The same for many parameter sets at once (each result identical to the single
+// solve; the Newton iterations of all springs advance together, which is faster).
+std::vector<StaticEquilibrium> solveStaticEquilibria(const std::vector<VehicleParameters>& ps);
 
 class RollPlaneModel : public MechanicalModel {
  public:

@@ -1,30 +1,124 @@
 // Inline tanh and cos for the damper law and the roll lever (SPEC §1.2, §1.4): glibc's
 // calls were 2/3 of the RK4 cost (ENGINEERING.md, Numerics). Accuracy: a few ulp.
+//
+// Everything here is straight-line arithmetic (no branch, no library call on
+// the common path), so a loop over the collocation points that calls these
+// vectorises; and because it is plain IEEE arithmetic (no reassociation), a
+// vectorised loop gives bit for bit the values of its own scalar remainder
+// loop. (A function compiled with FMA, e.g. a target_clones "x86-64-v3" clone,
+// contracts a * b + c and so may differ from a build without FMA in the last
+// bit; each point's value never depends on the batch it is in.)
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace pc_ekf {
 
-// Cephes tanh: rational form near 0 (keeps relative accuracy and tanh(0) = 0),
-// 1 - 2 / (exp(2|x|) + 1) elsewhere (no cancellation there). NaN propagates.
-inline double fastTanh(double x) {
-  const double a = std::abs(x);
-  if (a < 0.625) {
-    const double z = x * x;
-    const double p =
-        (-9.64399179425052238628e-1 * z - 9.92877231001918586564e1) * z - 1.61468768441708447952e3;
-    const double q = ((z + 1.12811678491632931402e2) * z + 2.23548839060100448583e3) * z +
-                     4.84406305325125486048e3;
-    return x + x * (z * p / q);
-  }
-  return std::copysign(1.0 - 2.0 / (std::exp(2.0 * a) + 1.0), x);
+namespace smooth_detail {
+
+inline std::uint64_t bitsOf(double x) {
+  std::uint64_t b;
+  std::memcpy(&b, &x, sizeof b);
+  return b;
+}
+inline double fromBits(std::uint64_t b) {
+  double x;
+  std::memcpy(&x, &b, sizeof x);
+  return x;
+}
+// condition ? a : b as a bit mask: both operands are evaluated, so the compiler
+// cannot sink either into a branch (a branch would stop vectorisation).
+inline double select(bool condition, double a, double b) {
+  const std::uint64_t mask = std::uint64_t{0} - static_cast<std::uint64_t>(condition);
+  return fromBits((bitsOf(a) & mask) | (bitsOf(b) & ~mask));
 }
 
-// cos(base + d) from cos/sin of base, with Taylor series in d for |d| <= 0.25 rad
-// (truncation below 1e-17); std::cos otherwise.
-inline double cosOfSum(double base, double cos_base, double sin_base, double d) {
-  if (!(std::abs(d) <= 0.25)) return std::cos(base + d);
+}  // namespace smooth_detail
+
+// tanh: Cephes' rational form for |x| < 0.625 (keeps relative accuracy and
+// tanh(0) = 0); elsewhere (e^2a - 1) / (e^2a + 1), e^2a = 2^n e^r with
+// e^r = (Q + P) / (Q - P) (Cephes' exp Pade form, r = 2a - n ln 2), so that
+// tanh = (2^n (Q + P) - (Q - P)) / (2^n (Q + P) + (Q - P)): no cancellation
+// for a >= 0.625, and the argument is capped at 40, where the result is 1 to
+// the last bit. Both forms are computed and the one division shared. Odd by
+// construction; NaN propagates; worst error 4e-16 relative.
+namespace smooth_detail {
+
+// Cephes' tanh numerator and denominator polynomials in z = x^2 (|x| < 0.625).
+inline double tanhP(double z) {
+  return (-9.64399179425052238628e-1 * z - 9.92877231001918586564e1) * z -
+         1.61468768441708447952e3;
+}
+inline double tanhQ(double z) {
+  return ((z + 1.12811678491632931402e2) * z + 2.23548839060100448583e3) * z +
+         4.84406305325125486048e3;
+}
+constexpr double kTanhNearZero = 0.625;
+
+}  // namespace smooth_detail
+
+namespace smooth_detail {
+
+// e^2a = up / down for a >= 0 (argument capped at 40): 2^n (Q + P) and Q - P.
+struct TanhExp {
+  double up, down;
+};
+inline TanhExp tanhExp(double a) {
+  const double two_a = 2.0 * a;
+  const double y = select(two_a > 40.0, 40.0, two_a);
+  constexpr double kRound = 0x1.8p52;  // adding it rounds to an integer held in the low bits
+  const double shifted = y * 1.4426950408889634073599 + kRound;
+  const double n = shifted - kRound;
+  double r = y - n * 6.93145751953125e-1;
+  r -= n * 1.42860682030941723212e-6;
+  const double rr = r * r;
+  const double ep = r * ((1.26177193074810590878e-4 * rr + 3.02994407707441961300e-2) * rr +
+                         9.99999999999999999910e-1);
+  const double eq = ((3.00198505138664455042e-6 * rr + 2.52448340349684104192e-3) * rr +
+                     2.27265548208155028766e-1) *
+                        rr +
+                    2.00000000000000000009e0;
+  // Low bits of `shifted` hold n (0 <= n <= 58): (n + 1023) << 52 is 2^n.
+  return {fromBits((bitsOf(shifted) + 1023) << 52) * (eq + ep), eq - ep};
+}
+
+}  // namespace smooth_detail
+
+inline double fastTanh(double x) {
+  using smooth_detail::select;
+  const double a = std::abs(x);
+  const double z = a * a;
+  const double p = smooth_detail::tanhP(z);
+  const double q = smooth_detail::tanhQ(z);
+  const smooth_detail::TanhExp e = smooth_detail::tanhExp(a);
+  const bool near_zero = a < smooth_detail::kTanhNearZero;
+  const double ratio =
+      select(near_zero, z * p, e.up - e.down) / select(near_zero, q, e.up + e.down);
+  return std::copysign(select(near_zero, a + a * ratio, ratio), x);
+}
+
+// fastTanh for |x| >= 0.625 (or NaN) only: the same operations as fastTanh
+// there, so the same value, without the rational branch.
+inline double fastTanhFarFromZero(double x) {
+  const smooth_detail::TanhExp e = smooth_detail::tanhExp(std::abs(x));
+  return std::copysign((e.up - e.down) / (e.up + e.down), x);
+}
+
+// fastTanh for |x| < 0.625 only (the same operations as fastTanh there, so
+// the same value): a loop whose arguments are all small can skip the
+// exponential.
+inline double fastTanhNearZero(double x) {
+  const double a = std::abs(x);
+  const double z = a * a;
+  const double ratio = z * smooth_detail::tanhP(z) / smooth_detail::tanhQ(z);
+  return std::copysign(a + a * ratio, x);
+}
+
+// cos(base + d) from cos/sin of base by Taylor series in d; truncation below
+// 1e-17 for |d| <= 0.25 rad, meaningless beyond (see cosOfSum).
+inline double cosOfSumSeries(double cos_base, double sin_base, double d) {
   const double z = d * d;
   const double c =
       1.0 -
@@ -36,6 +130,15 @@ inline double cosOfSum(double base, double cos_base, double sin_base, double d) 
               (1.0 / 6 -
                z * (1.0 / 120 - z * (1.0 / 5040 - z * (1.0 / 362880 - z * (1.0 / 39916800)))));
   return cos_base * c - sin_base * s;
+}
+
+// Whether cosOfSumSeries is valid for d (false for NaN).
+inline bool cosOfSumSeriesValid(double d) { return std::abs(d) <= 0.25; }
+
+// cos(base + d): the series for |d| <= 0.25 rad, std::cos otherwise.
+inline double cosOfSum(double base, double cos_base, double sin_base, double d) {
+  if (!cosOfSumSeriesValid(d)) return std::cos(base + d);
+  return cosOfSumSeries(cos_base, sin_base, d);
 }
 
 }  // namespace pc_ekf

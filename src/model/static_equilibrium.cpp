@@ -5,49 +5,111 @@
 #include <stdexcept>
 
 #include "model/roll_plane_model.h"
+#include "model/smooth_functions.h"
 
 namespace pc_ekf {
 
 namespace {
 
-// Solves k d + k3 d^3 = w. For k > 0, k3 >= 0 the law is odd, increasing and convex
-// for d > 0, so Newton from an over-estimate decreases monotonically to the root.
-double springCompression(double k, double k3, double w) {
-  const double a = std::abs(w);
-  double d = a / k;
-  if (k3 > 0.0) d = std::min(d, std::cbrt(a / k3));  // both over-estimate the root
-  for (int it = 0; it < 100 && std::isfinite(d); ++it) {
-    const double step = (k * d + k3 * d * d * d - a) / (k + 3.0 * k3 * d * d);
-    d -= step;
-    if (std::abs(step) <= 1e-15 * std::abs(d) || step == 0.0) return std::copysign(d, w);
+constexpr double kIterating = 0.0, kConverged = 1.0, kFailed = 2.0;
+
+// One Newton step for every spring still iterating (branch-free, so it
+// vectorises: compiled for x86-64-v3 and the baseline); a finished spring keeps
+// its value and state. Returns how many are still iterating.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) double newtonSweep(
+    const double* __restrict k, const double* __restrict k3, const double* __restrict a,
+    double* __restrict d, double* __restrict state, std::size_t count) {
+  using smooth_detail::select;
+  double iterating = 0.0;
+  for (std::size_t j = 0; j < count; ++j) {
+    const double x = d[j];
+    const double step = (k[j] * x + k3[j] * x * x * x - a[j]) / (k[j] + 3.0 * k3[j] * x * x);
+    const double next = x - step;
+    const bool active = state[j] == kIterating;
+    const bool converged = (std::abs(step) <= 1e-15 * std::abs(next)) | (step == 0.0);
+    const bool finite = std::abs(next) <= 1.7976931348623157e308;  // false for NaN, Inf
+    d[j] = select(active, next, x);
+    state[j] = select(active, select(converged, kConverged, select(finite, kIterating, kFailed)),
+                      state[j]);
+    iterating += select(state[j] == kIterating, 1.0, 0.0);
   }
-  std::ostringstream os;
-  os << "static equilibrium: Newton did not converge for spring k = " << k << ", k3 = " << k3
-     << ", load = " << w;
-  throw std::runtime_error(os.str());
+  return iterating;
+}
+
+// Solves k d + k3 d^3 = w for every spring at once. For k > 0, k3 >= 0 the law
+// is odd, increasing and convex for d > 0, so Newton from an over-estimate
+// decreases monotonically to the root. The solves advance in lockstep, each
+// stopping on its own criterion (so each gives what it would alone), and
+// vectorised across springs: prepare() solves 2Q of them at once.
+void springCompressions(const double* k, const double* k3, const double* w, double* out,
+                        std::size_t count) {
+  std::vector<double> a(count), d(count), state(count, kIterating);
+  for (std::size_t j = 0; j < count; ++j) {
+    a[j] = std::abs(w[j]);
+    d[j] = a[j] / k[j];
+    // Both over-estimate the root. The cube root is only needed when it can be
+    // the smaller (with a margin far above round-off, so the start is unchanged).
+    if (k3[j] > 0.0 && d[j] * d[j] * d[j] * k3[j] > a[j] * (1.0 - 1e-12)) {
+      d[j] = std::min(d[j], std::cbrt(a[j] / k3[j]));
+    }
+    if (!std::isfinite(d[j])) state[j] = kFailed;
+  }
+  for (int it = 0; it < 100; ++it) {
+    if (newtonSweep(k, k3, a.data(), d.data(), state.data(), count) == 0.0) break;
+  }
+  for (std::size_t j = 0; j < count; ++j) {
+    if (state[j] == kConverged) {
+      out[j] = std::copysign(d[j], w[j]);
+      continue;
+    }
+    std::ostringstream os;
+    os << "static equilibrium: Newton did not converge for spring k = " << k[j]
+       << ", k3 = " << k3[j] << ", load = " << w[j];
+    throw std::runtime_error(os.str());
+  }
 }
 
 }  // namespace
 
+std::vector<StaticEquilibrium> solveStaticEquilibria(const std::vector<VehicleParameters>& ps) {
+  const std::size_t n = ps.size();
+  std::vector<StaticEquilibrium> es(n);
+  std::vector<double> k(2 * n), k3(2 * n), w(2 * n), d(2 * n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const VehicleParameters& p = ps[j];
+    StaticEquilibrium& e = es[j];
+    const double total = p.bar_mass + p.added_mass;
+    const double length = p.bar_length;
+    e.combined_cg = (p.added_mass * p.added_mass_position + p.bar_mass * 0.5 * length) / total;
+    const double weight = total * p.gravity;
+    // W_1 from (L - D) rather than weight - W_2: same value, exactly symmetric at D = L/2.
+    e.load[0] = weight * (length - e.combined_cg) / length;
+    e.load[1] = weight * e.combined_cg / length;
+    for (int i = 0; i < 2; ++i) {
+      k[2 * j + i] = p.spring_linear[i];
+      k3[2 * j + i] = p.spring_cubic[i];
+      w[2 * j + i] = e.load[i];
+    }
+  }
+  springCompressions(k.data(), k3.data(), w.data(), d.data(), 2 * n);
+  for (std::size_t j = 0; j < n; ++j) {
+    const VehicleParameters& p = ps[j];
+    StaticEquilibrium& e = es[j];
+    for (int i = 0; i < 2; ++i) {
+      e.spring_compression[i] = d[2 * j + i];
+      const double tyre = (e.load[i] + p.unsprung_mass[i] * p.gravity) / p.tyre_stiffness[i];
+      e.height[i] = -(e.spring_compression[i] + tyre);
+    }
+    e.roll_angle = std::atan((e.height[1] - e.height[0]) / p.bar_length);
+    if (!std::isfinite(e.roll_angle)) {
+      throw std::runtime_error("static equilibrium: non-finite roll angle");
+    }
+  }
+  return es;
+}
+
 StaticEquilibrium solveStaticEquilibrium(const VehicleParameters& p) {
-  const double total = p.bar_mass + p.added_mass;
-  const double length = p.bar_length;
-  StaticEquilibrium e;
-  e.combined_cg = (p.added_mass * p.added_mass_position + p.bar_mass * 0.5 * length) / total;
-  const double weight = total * p.gravity;
-  // W_1 from (L - D) rather than weight - W_2: same value, exactly symmetric at D = L/2.
-  e.load[0] = weight * (length - e.combined_cg) / length;
-  e.load[1] = weight * e.combined_cg / length;
-  for (int i = 0; i < 2; ++i) {
-    e.spring_compression[i] = springCompression(p.spring_linear[i], p.spring_cubic[i], e.load[i]);
-    const double tyre = (e.load[i] + p.unsprung_mass[i] * p.gravity) / p.tyre_stiffness[i];
-    e.height[i] = -(e.spring_compression[i] + tyre);
-  }
-  e.roll_angle = std::atan((e.height[1] - e.height[0]) / length);
-  if (!std::isfinite(e.roll_angle)) {
-    throw std::runtime_error("static equilibrium: non-finite roll angle");
-  }
-  return e;
+  return solveStaticEquilibria({p}).front();
 }
 
 }  // namespace pc_ekf

@@ -33,7 +33,7 @@ Eigen::VectorXd VehicleParameters::toVector() const {
   return v;
 }
 
-VehicleParameters VehicleParameters::fromVector(const Eigen::VectorXd& v,
+VehicleParameters VehicleParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                                 const VehicleParameters& laws) {
   if (v.size() != 16) {
     throw std::invalid_argument("VehicleParameters::fromVector: expected 16 values, got " +
