@@ -1,36 +1,138 @@
 #!/usr/bin/env bash
-# The demo: installs what is missing, builds, shows the model at the nominal
-# and true parameters, then estimates M and d_CG on the paper's speed-bump
-# data (SPEC §4 cases A and C) and prints them next to the truth.
-# (The ROS form - roscore, synthesize_bag, replay_node -> estimator_node -
-# comes with estimator_node; this version needs no ROS master.)
+# The demo (README's first command): installs what is missing, builds, starts
+# its own roscore on a free port, synthesises the paper's speed-bump data
+# into bags (N = 10 and N = 100 samples over 3 s, 1 % noise), replays each
+# through replay_node into estimator_node (lossless handshake, full speed),
+# asks the node for its batch (ES-MDA) estimate, and prints M and d_CG next
+# to the truth and to estimate_offline on the same bag. Stops exactly what it
+# started (by PID, also on Ctrl-C or failure).
+#   --samples "10 100"  the sample counts to run (default both)
+#   --node-args "ARGS"  extra estimator_node arguments, e.g. "_node/publish_pdf:=false"
+#   --hold              then loop the last bag in real time into a fresh
+#                       estimator_node until Enter / Ctrl-C (rostopic echo/hz,
+#                       rosnode info, rosservice call against the live graph)
 set -euo pipefail
-source "$(dirname "$0")/lib/common.sh"
+here=$(cd "$(dirname "$0")" && pwd)
+source "$here/lib/common.sh"
+source "$here/lib/roscore.sh"
 
-pc_ekf_ensure_packages
+sample_counts="10 100"
+node_args=""
+hold=0
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --samples) sample_counts=${2:?--samples needs a list, e.g. \"10 100\"}; shift ;;
+    --node-args) node_args=${2?--node-args needs a value}; shift ;;
+    --hold) hold=1 ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    *) echo "demo.sh: unknown option '$1'" >&2; exit 2 ;;
+  esac
+  shift
+done
+
+trap pc_ekf_stop_owned EXIT
+trap 'exit 130' INT TERM  # through the EXIT trap
+
+# The estimate collector (lib/collect_estimates.py) is rospy and calls a std_srvs service.
+pc_ekf_ensure_packages python3-rospy python3-std-srvs
 pc_ekf_log "building (log: .build/build.log)"
 mkdir -p "$PC_EKF_ROOT/.build"
 pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
   tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; exit 1; }
+pc_ekf_source_workspace
 bin="$PC_EKF_WS/devel/lib/pc_ekf"
-config="$PC_EKF_ROOT/config/speed_bump.yaml"
+out="$PC_EKF_ROOT/.build/demo"
+rm -rf "$out" && mkdir -p "$out"
 
-echo "== Model: static equilibrium and speed-bump response (no noise) =="
-"$bin/simulate_vehicle" --config "$config"
+pc_ekf_roscore_start "$out/roscore.log" || exit 1
+pc_ekf_log "roscore at $ROS_MASTER_URI (pid $PC_EKF_ROSCORE_PID)"
 
-echo
-echo "== Estimates from 10 noisy samples (1 % noise, seed 1); truth M = 223.26 kg, d_CG = 0.6882 m =="
-printf "%-28s %22s %22s %8s\n" "method" "M [kg]" "d_CG [m]" "healthy"
-for run in "one_step square_root" "one_step paper" "whole_set square_root" \
-           "es_mda square_root" "enkf square_root" "grid square_root"; do
-  set -- $run
-  json=$("$bin/estimate_offline" --config "$config" --method "$1" --update "$2" 2>/dev/null)
-  /usr/bin/python3 - "$1 ($2)" "$json" <<'PY'
-import json, sys
-r = json.loads(sys.argv[2])
-m, d = r["parameters"]
-print(f"{sys.argv[1]:<28} {m['mean']:10.3f} +- {m['stddev']:8.3f} "
-      f"{d['mean']:10.5f} +- {d['stddev']:8.5f} {str(r['healthy']):>8}")
-PY
+# demo_fail MESSAGE LOG...: reports a failed step with the end of its logs.
+demo_fail() {
+  pc_ekf_log "$1"
+  shift
+  tail -n 5 "$@" >&2
+  return 1
+}
+
+# demo_run N: one bag of N samples through the graph and offline; prints its
+# table. (Called in an `||` list, where `set -e` is off: every step is checked.)
+demo_run() {
+  local n=$1 config="$PC_EKF_ROOT/config/speed_bump.yaml"
+  local bag="$out/speed_bump_n$n.bag" run="$out/n$n"
+  mkdir -p "$run"
+  if [ "$n" != 10 ]; then  # the paper's file with sampling.samples = N
+    config="$out/speed_bump_n$n.yaml"
+    sed -E "/^sampling:/,/^[a-z]/ s/^(  samples:) *10\b/\1 $n/" \
+      "$PC_EKF_ROOT/config/speed_bump.yaml" >"$config"
+    grep -qE "^  samples: $n\b" "$config" || { pc_ekf_log "cannot set samples: $n"; return 1; }
+  fi
+  "$bin/synthesize_bag" --config "$config" --output "$bag" 2>"$run/synthesize_bag.log" ||
+    { demo_fail "synthesize_bag failed" "$run/synthesize_bag.log"; return 1; }
+
+  # The estimator, then the collector; replay_node waits until both have
+  # connected to it (~wait_for_subscribers) and, with ~lossless, publishes
+  # each sample once the estimate of the previous one arrived.
+  # shellcheck disable=SC2086  # node_args: several words on purpose
+  pc_ekf_start_owned estimator_node "$run/estimator_node.log" \
+    "$bin/estimator_node" "_config_file:=$config" __name:=estimator_node $node_args
+  local estimator=$PC_EKF_LAST_PID
+  pc_ekf_start_owned collector "$run/collector.log" /usr/bin/python3 \
+    "$here/lib/collect_estimates.py" --expect "$n" --batch --ready "$run/ready" --timeout 120
+  local collector=$PC_EKF_LAST_PID
+  for _ in $(seq 1200); do
+    [ -e "$run/ready" ] && break
+    kill -0 "$collector" 2>/dev/null && kill -0 "$estimator" 2>/dev/null || break
+    sleep 0.1
+  done
+  [ -e "$run/ready" ] ||
+    { demo_fail "estimator_node did not come up" "$run"/estimator_node.log "$run"/collector.log; return 1; }
+
+  pc_ekf_start_owned replay_node "$run/replay_node.log" "$bin/replay_node" "_bag:=$bag" \
+    _rate:=0 _lossless:=true __name:=replay_node
+  wait "$PC_EKF_LAST_PID" || { demo_fail "replay_node failed" "$run/replay_node.log"; return 1; }
+  wait "$collector" || { demo_fail "collecting the estimates failed" "$run/collector.log"; return 1; }
+  # The collector's JSON is the last line of its log (rospy may log before it).
+  tail -n 1 "$run/collector.log" >"$run/node.json"
+
+  "$bin/estimate_offline" --config "$config" --bag "$bag" --out "$run/offline_one_step" \
+    >/dev/null 2>"$run/offline.log" &&
+    "$bin/estimate_offline" --config "$config" --bag "$bag" --method es_mda \
+      >"$run/offline_es_mda.json" 2>>"$run/offline.log" ||
+    { demo_fail "estimate_offline failed" "$run/offline.log"; return 1; }
+
+  echo
+  echo "== N = $n samples over 3 s, 1 % noise (bag: ${bag#"$PC_EKF_ROOT"/}) =="
+  /usr/bin/python3 "$here/lib/demo_table.py" "$n" "$run/node.json" \
+    "$run/offline_one_step" "$run/offline_es_mda.json" "$run/replay_node.log" || return 1
+  pc_ekf_stop_group "$estimator" estimator_node
+}
+
+echo "Estimating the added mass M and its position d_CG on the paper's speed bump"
+echo "(square-root PC-EKF one step per sample; batch = ES-MDA on all samples)."
+for n in $sample_counts; do
+  demo_run "$n" || exit 1
 done
-echo "(grid = exact Bayesian posterior, the yardstick; see README)"
+echo
+echo "err/std = (estimate - truth) / std. Logs: ${out#"$PC_EKF_ROOT"/}/"
+
+[ "$hold" = 1 ] || exit 0
+# Live: the last bag looped in real time; the estimator starts over at each
+# pass (stamps jump back), so there is always something to look at.
+last_n=${sample_counts##* }
+config="$PC_EKF_ROOT/config/speed_bump.yaml"
+[ -e "$out/speed_bump_n$last_n.yaml" ] && config="$out/speed_bump_n$last_n.yaml"
+# shellcheck disable=SC2086
+pc_ekf_start_owned estimator_node "$out/live_estimator_node.log" "$bin/estimator_node" \
+  "_config_file:=$config" _node/reset_on_time_jump:=true __name:=estimator_node $node_args
+pc_ekf_start_owned replay_node "$out/live_replay_node.log" "$bin/replay_node" \
+  "_bag:=$out/speed_bump_n$last_n.bag" _rate:=1 _loop:=true __name:=replay_node
+echo
+echo "Live: replay_node loops speed_bump_n$last_n.bag in real time into estimator_node."
+echo "In another shell:"
+echo "  source ${PC_EKF_WS#"$PC_EKF_ROOT"/}/devel/setup.bash"
+echo "  export ROS_MASTER_URI=$ROS_MASTER_URI ROS_HOSTNAME=${ROS_HOSTNAME:-}"
+echo "  rostopic echo -n 1 /parameter_estimate; rostopic hz /parameter_estimate"
+echo "  rosnode info /estimator_node; rosservice call /estimator_node/estimate_batch"
+echo "Press Enter (or Ctrl-C) to stop everything."
+read -r _ || true

@@ -13,6 +13,7 @@ PC_EKF_APT_PACKAGES=(
   libbenchmark-dev ros-core-dev python3-rostest python3-roslaunch python3-rosmaster
   python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev colcon
   python3-colcon-ros python3-matplotlib python3-numpy
+  clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
 )
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }

@@ -188,7 +188,48 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   d.finish();
 }
 
+bool readFlag(YamlMapReader& r, const std::string& key, bool value) {
+  std::string text = value ? "true" : "false";
+  r.text(key, text);
+  if (text == "true" || text == "True" || text == "TRUE") return true;
+  if (text == "false" || text == "False" || text == "FALSE") return false;
+  r.fail(key, "'" + text + "'", "true or false");
+}
+
+void readNode(YamlMapReader r, NodeConfig& n) {
+  YamlMapReader j = r.map("joints");
+  j.text("left", n.left_joint);
+  j.text("right", n.right_joint);
+  if (n.left_joint.empty()) j.fail("left", "(empty)", "a joint name");
+  if (n.right_joint.empty()) j.fail("right", "(empty)", "a joint name");
+  if (n.left_joint == n.right_joint) {
+    j.fail("right", "'" + n.right_joint + "'", "a name different from joints.left");
+  }
+  j.finish();
+  n.reset_on_time_jump = readFlag(r, "reset_on_time_jump", n.reset_on_time_jump);
+  r.number("time_jump_tolerance", n.time_jump_tolerance, 0.0, 1e6);
+  n.publish_pdf = readFlag(r, "publish_pdf", n.publish_pdf);
+  r.integer("pdf_every", n.pdf_every, 1, 1000000000);
+  r.number("road_wait_timeout", n.road_wait_timeout, 0.0, 3600.0);
+  r.integer("max_pending_samples", n.max_pending_samples, 1, 100000000);
+  r.integer("max_batch_samples", n.max_batch_samples, 1, 100000000);
+  r.integer("max_road_samples", n.max_road_samples, 2, 1000000000);
+  r.integer("queue_size", n.queue_size, 1, 100000000);
+  n.coherence_check = readFlag(r, "coherence_check", n.coherence_check);
+  std::string batch = toString(n.batch_method);
+  r.text("batch_method", batch);
+  if (batch == "es_mda")
+    n.batch_method = BatchMethod::kEsMda;
+  else if (batch == "whole_set")
+    n.batch_method = BatchMethod::kWholeSet;
+  else
+    r.fail("batch_method", "'" + batch + "'", "es_mda or whole_set");
+  r.finish();
+}
+
 }  // namespace
+
+std::string toString(BatchMethod m) { return m == BatchMethod::kWholeSet ? "whole_set" : "es_mda"; }
 
 std::string toString(RoadSource s) {
   switch (s) {
@@ -290,6 +331,7 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   integ.finish();
 
   readFilterSections(root, c);
+  readNode(root.map("node"), c.node);
   root.finish();
   return c;
 }

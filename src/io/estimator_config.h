@@ -98,6 +98,26 @@ struct PdfConfig {
   std::uint64_t seed = 11;
 };
 
+// estimator_node only (section `node:`); the CLIs accept and ignore it.
+enum class BatchMethod { kEsMda, kWholeSet };
+std::string toString(BatchMethod m);
+
+struct NodeConfig {
+  std::string left_joint = "left_suspension";    // JointState name of tyre 1 (u1, v1)
+  std::string right_joint = "right_suspension";  // tyre 2 (u2, v2)
+  bool reset_on_time_jump = false;               // else a sample stamped back in time is dropped
+  double time_jump_tolerance = 0.5;              // s: a step back beyond this is a time jump
+  bool publish_pdf = true;
+  int pdf_every = 1;               // publish parameter_pdf every k-th sample
+  double road_wait_timeout = 0.5;  // s (wall clock) without road data before a sample goes on
+  int max_pending_samples = 1000;  // samples waiting for road data
+  int max_batch_samples = 100000;  // kept for ~estimate_batch (the first ones)
+  int max_road_samples = 1000000;  // road buffer bound
+  int queue_size = 20000;          // subscriber and publisher queues
+  bool coherence_check = true;     // second filter on every k-th sample (SPEC §3.6)
+  BatchMethod batch_method = BatchMethod::kEsMda;
+};
+
 struct EstimatorConfig {
   std::string source = "<config>";  // file name, for messages
   VehicleParameters vehicle;
@@ -115,6 +135,7 @@ struct EstimatorConfig {
   GridConfig grid;
   HealthConfig health;
   PdfConfig pdf;
+  NodeConfig node;
 
   std::vector<GermSpec> germs() const;
   // Parameter values at germ point xi (one entry per uncertain parameter).

@@ -156,7 +156,13 @@ void YamlMapReader::textList(const std::string& key, std::vector<std::string>& v
 void YamlMapReader::finish() const {
   if (!node_.IsMap()) return;
   for (const auto& kv : node_) {
-    const std::string key = kv.first.as<std::string>();
+    // A null, list or map key (`~: 1`, `? [a, b]: 1`) is no key of the schema;
+    // as<std::string>() would throw YAML::TypedBadConversion (found by fuzzing).
+    if (!kv.first.IsScalar()) {
+      throw ConfigError(source_ + ": key '" + (path_.empty() ? "(root)" : path_) +
+                        "': a key must be a text value, got " + yamlValueText(kv.first));
+    }
+    const std::string key = kv.first.Scalar();
     if (!read_.count(key)) {
       throw ConfigError(source_ + ": key '" + keyPath(key) + "': unknown key (value " +
                         yamlValueText(kv.second) + "); see config/speed_bump.yaml for the schema");

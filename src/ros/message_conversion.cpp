@@ -78,10 +78,12 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
   if (!positions_ok) {
     out.problems.push_back("position has " + std::to_string(msg.position.size()) + " entries for " +
                            std::to_string(n) + " joint names; ignored");
+    out.problem_kinds.push_back(JointStateProblem::kArrayLength);
   }
   if (!velocities_ok) {
     out.problems.push_back("velocity has " + std::to_string(msg.velocity.size()) + " entries for " +
                            std::to_string(n) + " joint names; ignored");
+    out.problem_kinds.push_back(JointStateProblem::kArrayLength);
   }
 
   // side 0 = left (u1, v1), 1 = right (u2, v2); -1 = not in the message.
@@ -97,6 +99,7 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
     if (side < 0) {
       out.problems.push_back("unknown joint name '" + name + "' (expected '" + joints.left +
                              "' or '" + joints.right + "'); ignored");
+      out.problem_kinds.push_back(JointStateProblem::kUnknownJoint);
       continue;
     }
     if (index[side] >= 0) duplicate[side] = true;
@@ -109,6 +112,7 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
     const std::string& name = side == 0 ? joints.left : joints.right;
     if (duplicate[side]) {
       out.problems.push_back("joint '" + name + "' appears more than once; ignored");
+      out.problem_kinds.push_back(JointStateProblem::kDuplicateJoint);
       continue;
     }
     if (index[side] < 0) continue;
@@ -116,9 +120,13 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
                           const char* field) {
       if (!usable || array.empty()) return;
       const double v = array[index[side]];
-      if (std::isnan(v)) return;  // not observed
+      if (std::isnan(v)) {  // not observed
+        ++out.nan_elements;
+        return;
+      }
       if (!std::isfinite(v)) {
         out.problems.push_back(std::string(field) + " of '" + name + "' is not finite; ignored");
+        out.problem_kinds.push_back(JointStateProblem::kNonFinite);
         return;
       }
       values[channel] = v;

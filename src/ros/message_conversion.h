@@ -47,6 +47,9 @@ struct SuspensionJoints {
 // Channel order of the model (RollPlaneModel::channelNames()): u1, u2, v1, v2.
 constexpr int kChannelU1 = 0, kChannelU2 = 1, kChannelV1 = 2, kChannelV2 = 3;
 
+// Why an element or array of a JointState was not used (node counters).
+enum class JointStateProblem { kArrayLength, kUnknownJoint, kDuplicateJoint, kNonFinite };
+
 struct JointStateConversion {
   // Channels with a finite value, ascending; `time` is the caller's t.
   // NaN (and absent arrays or joints) mean "not observed" and are not problems.
@@ -55,6 +58,8 @@ struct JointStateConversion {
   // joint, position/velocity array length different from name's, +-Inf.
   // The rest of the message is still converted.
   std::vector<std::string> problems;
+  std::vector<JointStateProblem> problem_kinds;  // parallel to `problems`
+  int nan_elements = 0;  // NaN values of the named joints (not observed)
   bool empty() const { return measurement.channels.empty(); }
 };
 

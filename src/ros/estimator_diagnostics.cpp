@@ -1,0 +1,142 @@
+#include "ros/estimator_diagnostics.h"
+
+#include <sstream>
+
+namespace pc_ekf {
+namespace {
+
+using diagnostic_msgs::DiagnosticStatus;
+
+std::uint64_t sum(const std::map<std::string, std::uint64_t>& m) {
+  std::uint64_t n = 0;
+  for (const auto& kv : m) n += kv.second;
+  return n;
+}
+
+std::string joined(const std::vector<std::string>& items) {
+  std::string out;
+  for (const auto& s : items) out += (out.empty() ? "" : "; ") + s;
+  return out;
+}
+
+}  // namespace
+
+std::uint64_t EstimatorCounters::rejectedTotal() const {
+  return sum(samples_rejected) + sum(elements_rejected) + sum(road_rejected);
+}
+
+EstimatorDiagnostics::EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh,
+                                           const std::string& node_name,
+                                           const EstimatorConfig& config)
+    : updater_(nh, pnh, node_name), config_(config), reported_at_(ros::WallTime::now()) {
+  updater_.setHardwareID("none");  // a software estimator
+  updater_.add("configuration", this, &EstimatorDiagnostics::reportConfiguration);
+  updater_.add("input", this, &EstimatorDiagnostics::reportInput);
+  updater_.add("filter health", this, &EstimatorDiagnostics::reportHealth);
+}
+
+void EstimatorDiagnostics::setRunState(const std::string& road_mode, const std::string& origin,
+                                       std::size_t pending, std::size_t road_samples) {
+  road_mode_ = road_mode;
+  origin_ = origin;
+  pending_ = pending;
+  road_samples_ = road_samples;
+}
+
+void EstimatorDiagnostics::reportConfiguration(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  const EstimatorConfig& c = config_;
+  std::string parameters;
+  for (const auto& u : c.uncertain) parameters += (parameters.empty() ? "" : ", ") + u.name;
+  std::ostringstream m;
+  m << "estimating " << parameters << "; road " << toString(c.road.source) << ", update "
+    << toString(c.update) << ", batch " << toString(c.node.batch_method);
+  s.summary(DiagnosticStatus::OK, m.str());
+  s.add("config source", c.source);
+  s.add("parameters", parameters);
+  s.add("road source", toString(c.road.source));
+  s.add("update rule", toString(c.update));
+  s.add("pc order", c.pc_order);
+  s.add("collocation points", c.collocation.points);
+  s.add("sampling interval (analytic origin)", c.sampling.interval());
+  s.add("joints", c.node.left_joint + ", " + c.node.right_joint);
+  s.add("batch method", toString(c.node.batch_method));
+  s.add("coherence check", c.node.coherence_check);
+  s.add("coherence decimation", c.health.coherence_decimation);
+  s.add("publish pdf", c.node.publish_pdf);
+  s.add("reset on time jump", c.node.reset_on_time_jump);
+  s.add("road wait timeout", c.node.road_wait_timeout);
+  s.add("queue size", c.node.queue_size);
+}
+
+void EstimatorDiagnostics::reportInput(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  const EstimatorCounters& c = counters_;
+  const ros::WallTime now = ros::WallTime::now();
+  const double elapsed = (now - reported_at_).toSec();
+  const double rate =
+      elapsed > 0.0 ? static_cast<double>(c.samples_received - reported_received_) / elapsed : 0.0;
+  const std::uint64_t rejected = c.rejectedTotal();
+  const bool new_rejections = rejected > reported_rejected_;
+  const bool new_expired = c.road_wait_expired > reported_expired_;
+  reported_at_ = now;
+  reported_received_ = c.samples_received;
+  reported_rejected_ = rejected;
+  reported_expired_ = c.road_wait_expired;
+
+  std::ostringstream m;
+  m << c.samples_processed << " samples processed, " << rejected << " inputs rejected";
+  if (new_rejections) m << " (new since the last report)";
+  if (new_expired) m << "; road data late, held at its last value";
+  s.summary(new_rejections || new_expired ? DiagnosticStatus::WARN : DiagnosticStatus::OK, m.str());
+  s.add("input rate (samples/s)", rate);
+  s.add("samples received", c.samples_received);
+  s.add("samples processed", c.samples_processed);
+  s.add("samples rejected", sum(c.samples_rejected));
+  for (const auto& kv : c.samples_rejected) s.add("samples rejected: " + kv.first, kv.second);
+  s.add("elements rejected", sum(c.elements_rejected));
+  for (const auto& kv : c.elements_rejected) s.add("elements rejected: " + kv.first, kv.second);
+  s.add("nan elements (not observed)", c.nan_elements);
+  s.add("road received", c.road_received);
+  s.add("road accepted", c.road_accepted);
+  for (const auto& kv : c.road_rejected) s.add("road rejected: " + kv.first, kv.second);
+  s.add("road wait expired", c.road_wait_expired);
+  s.add("batch samples not kept", c.batch_not_kept);
+  s.add("resets", c.resets);
+  s.add("time jump resets", c.time_jump_resets);
+  s.add("road mode", road_mode_);
+  s.add("time origin (stamp)", origin_);
+  s.add("pending samples", pending_);
+  s.add("road samples buffered", road_samples_);
+}
+
+void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  const LastUpdate& u = last_;
+  s.add("non-finite updates", counters_.non_finite_updates);
+  if (!u.any) {
+    s.summary(DiagnosticStatus::OK, "waiting for samples");
+    return;
+  }
+  const HealthStatus& h = u.health;
+  if (u.non_finite || h.non_finite || h.forecast_failed) {
+    s.summary(DiagnosticStatus::ERROR, "filter diverged: " + joined(u.warnings));
+  } else if (!u.healthy || h.support_exceeded) {
+    s.summary(DiagnosticStatus::WARN, joined(u.warnings));
+  } else {
+    s.summary(DiagnosticStatus::OK, "healthy");
+  }
+  s.add("sample index", u.sample_index);
+  s.add("time (s)", u.time);
+  s.add("last update latency (s)", u.latency);
+  s.add("last update compute time (s)", u.compute);
+  s.add("nis", h.nis);
+  s.add("nis outside bounds", h.nis_outside);
+  s.add("nis window mean", h.nis_window_mean);
+  s.add("nis window outside bounds", h.nis_window_outside);
+  s.add("support exceeded", h.support_exceeded);
+  s.add("non finite", u.non_finite || h.non_finite);
+  s.add("forecast failed", h.forecast_failed);
+  s.add("band nested (informational)", h.band_nested);
+  s.add("coherence flagged", u.coherence_flagged);
+  s.add("healthy", u.healthy);
+}
+
+}  // namespace pc_ekf

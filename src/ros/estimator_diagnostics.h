@@ -1,0 +1,86 @@
+// What estimator_node reports on /diagnostics (diagnostic_updater): the
+// configuration, the input (rate, samples processed, rejections by reason)
+// and the filter's health (SPEC §3.6) with the last update latency.
+#pragma once
+
+#include <diagnostic_updater/diagnostic_updater.h>
+
+#include <cstdint>
+#include <map>
+#include <string>
+
+#include "filter/health.h"
+#include "io/estimator_config.h"
+
+namespace pc_ekf {
+
+// Cumulative since the node started (not cleared by ~reset).
+struct EstimatorCounters {
+  std::uint64_t samples_received = 0;   // joint_states messages
+  std::uint64_t samples_processed = 0;  // through the filter, one estimate each
+  std::uint64_t road_received = 0;
+  std::uint64_t road_accepted = 0;
+  // Whole joint_states messages not used, by reason (duplicate_stamp,
+  // out_of_order, time_jump, before_origin, array_length,
+  // no_observed_channel, no_road, filter_refused).
+  std::map<std::string, std::uint64_t> samples_rejected;
+  // Single values or joints not used (unknown_joint, duplicate_joint, non_finite).
+  std::map<std::string, std::uint64_t> elements_rejected;
+  std::uint64_t nan_elements = 0;  // NaN = not observed (INTERFACE.md), not an error
+  // road/profile messages not used (duplicate_stamp, out_of_order, time_jump,
+  // non_finite, ignored = analytic road in use).
+  std::map<std::string, std::uint64_t> road_rejected;
+  std::uint64_t road_wait_expired = 0;   // processed with the road held at its last value
+  std::uint64_t non_finite_updates = 0;  // filter state restored (see README)
+  std::uint64_t batch_not_kept = 0;      // beyond node.max_batch_samples
+  std::uint64_t resets = 0;              // ~reset calls
+  std::uint64_t time_jump_resets = 0;    // node.reset_on_time_jump
+  std::uint64_t rejectedTotal() const;
+};
+
+// The last processed sample, for the health status.
+struct LastUpdate {
+  bool any = false;
+  std::uint32_t sample_index = 0;
+  double time = 0.0;     // s since the origin
+  double latency = 0.0;  // s from arrival to publication (includes the road wait)
+  double compute = 0.0;  // s in the filter
+  HealthStatus health;
+  bool coherence_flagged = false;
+  bool healthy = true;
+  bool non_finite = false;
+  std::vector<std::string> warnings;
+};
+
+class EstimatorDiagnostics {
+ public:
+  EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& node_name,
+                       const EstimatorConfig& config);
+
+  EstimatorCounters& counters() { return counters_; }
+  LastUpdate& last() { return last_; }
+  // Run state shown with the input: origin, road mode, pending samples.
+  // `origin`: the stamp of t = 0 as sec.nsec, "" while not set.
+  void setRunState(const std::string& road_mode, const std::string& origin, std::size_t pending,
+                   std::size_t road_samples);
+  void publish() { updater_.force_update(); }
+  double period() { return updater_.getPeriod(); }
+
+ private:
+  void reportConfiguration(diagnostic_updater::DiagnosticStatusWrapper& s);
+  void reportInput(diagnostic_updater::DiagnosticStatusWrapper& s);
+  void reportHealth(diagnostic_updater::DiagnosticStatusWrapper& s);
+
+  diagnostic_updater::Updater updater_;
+  EstimatorConfig config_;
+  EstimatorCounters counters_;
+  LastUpdate last_;
+  // For rates and "new rejections since the last report".
+  std::uint64_t reported_received_ = 0, reported_rejected_ = 0, reported_expired_ = 0;
+  ros::WallTime reported_at_;
+  std::string road_mode_ = "undecided";
+  std::string origin_;
+  std::size_t pending_ = 0, road_samples_ = 0;
+};
+
+}  // namespace pc_ekf

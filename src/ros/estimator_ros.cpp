@@ -1,0 +1,293 @@
+#include "ros/estimator_ros.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <stdexcept>
+
+#include "io/estimation_setup.h"
+#include "ros/ros_config.h"
+
+namespace pc_ekf {
+namespace {
+
+constexpr double kWarnPeriod = 5.0;  // s between repeated warnings of one kind
+
+double steadySeconds() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+
+TimelineSettings timelineSettings(const EstimatorConfig& c) {
+  TimelineSettings s;
+  s.road_topic_required = c.road.source == RoadSource::kTopic;
+  s.analytic_interval = c.sampling.interval();
+  s.time_jump_tolerance = c.node.time_jump_tolerance;
+  s.road_wait_timeout = c.node.road_wait_timeout;
+  s.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);
+  s.max_road = static_cast<std::size_t>(c.node.max_road_samples);
+  return s;
+}
+
+const char* toString(JointStateProblem p) {
+  switch (p) {
+    case JointStateProblem::kArrayLength:
+      return "array_length";
+    case JointStateProblem::kUnknownJoint:
+      return "unknown_joint";
+    case JointStateProblem::kDuplicateJoint:
+      return "duplicate_joint";
+    case JointStateProblem::kNonFinite:
+      return "non_finite";
+  }
+  return "?";
+}
+
+const char* toString(RoadMode m) {
+  switch (m) {
+    case RoadMode::kUndecided:
+      return "undecided (waiting for the first message)";
+    case RoadMode::kTopic:
+      return "road/profile topic";
+    case RoadMode::kAnalytic:
+      return "analytic (config)";
+  }
+  return "?";
+}
+
+}  // namespace
+
+EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
+    : name_(name),
+      config_(loadRosConfig(pnh)),
+      nh_(nh),
+      pnh_(pnh),
+      timeline_(timelineSettings(config_)),
+      diagnostics_(nh, pnh, name, config_) {
+  joints_.left = config_.node.left_joint;
+  joints_.right = config_.node.right_joint;
+  // Built now so that a bad road file or collocation design is a start-up error.
+  if (config_.road.source == RoadSource::kTopic) {
+    prior_propagator_ =
+        makePropagator(config_, makeModel(config_, std::make_shared<SampledRoad>()));
+  } else {
+    analytic_propagator_ = makePropagator(config_, makeModel(config_, makeRoad(config_)));
+    prior_propagator_ = analytic_propagator_;
+  }
+  if (config_.node.publish_pdf) {
+    pdfs_ = std::make_shared<ParameterPdfSampler>(
+        prior_propagator_->basis(), prior_propagator_->parameterCount(), config_.pdf.draws,
+        config_.pdf.bins, config_.pdf.seed);
+  }
+
+  const int queue = config_.node.queue_size;
+  estimate_pub_ = nh_.advertise<ParameterEstimate>("parameter_estimate", queue);
+  batch_pub_ = nh_.advertise<ParameterEstimate>("parameter_estimate/batch", 10);
+  if (config_.node.publish_pdf) pdf_pub_ = nh_.advertise<ParameterPdf>("parameter_pdf", queue);
+  const auto hints = ros::TransportHints().tcpNoDelay();
+  joint_state_sub_ =
+      nh_.subscribe("suspension/joint_states", queue, &EstimatorRos::onJointState, this, hints);
+  road_sub_ = nh_.subscribe("road/profile", queue, &EstimatorRos::onRoad, this, hints);
+  reset_srv_ = pnh_.advertiseService("reset", &EstimatorRos::onReset, this);
+  batch_srv_ = pnh_.advertiseService("estimate_batch", &EstimatorRos::onEstimateBatch, this);
+
+  // Wall-clock timers: they must keep running when /clock stops or jumps back.
+  const double wait = std::clamp(config_.node.road_wait_timeout / 4.0, 0.005, 0.05);
+  wait_timer_ = nh_.createWallTimer(ros::WallDuration(wait), &EstimatorRos::onWaitTimer, this);
+  diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_.period()),
+                                           &EstimatorRos::onDiagnosticsTimer, this);
+  ROS_INFO("%s: estimating from %s (road %s, update %s); config %s", name_.c_str(),
+           nh_.resolveName("suspension/joint_states").c_str(),
+           toString(config_.road.source).c_str(), toString(config_.update).c_str(),
+           config_.source.c_str());
+}
+
+void EstimatorRos::startRun() {
+  timeline_.reset();
+  run_.reset();
+  updateRunState();
+}
+
+void EstimatorRos::rejectSample(const std::string& reason, const std::string& detail) {
+  ++diagnostics_.counters().samples_rejected[reason];
+  ROS_WARN_THROTTLE(kWarnPeriod, "%s: joint_states rejected (%s): %s", name_.c_str(),
+                    reason.c_str(), detail.c_str());
+}
+
+void EstimatorRos::onJointState(const sensor_msgs::JointState::ConstPtr& msg) {
+  const double now = steadySeconds();
+  EstimatorCounters& counters = diagnostics_.counters();
+  ++counters.samples_received;
+  const JointStateConversion conv = measurementFromJointState(*msg, 0.0, joints_);
+  counters.nan_elements += static_cast<std::uint64_t>(conv.nan_elements);
+  bool malformed = false;
+  for (std::size_t i = 0; i < conv.problem_kinds.size(); ++i) {
+    if (conv.problem_kinds[i] == JointStateProblem::kArrayLength) {
+      malformed = true;  // names and values cannot be matched: the whole message goes
+    } else {
+      ++counters.elements_rejected[toString(conv.problem_kinds[i])];
+      ROS_WARN_THROTTLE(kWarnPeriod, "%s: joint_states element rejected: %s", name_.c_str(),
+                        conv.problems[i].c_str());
+    }
+  }
+  if (malformed) {
+    rejectSample("array_length", conv.problems.front());
+    return;
+  }
+  if (conv.empty()) {
+    rejectSample("no_observed_channel", "no finite position or velocity of the suspension joints");
+    return;
+  }
+  StampVerdict v = timeline_.addSample(msg->header.stamp, conv.measurement, now);
+  if (v == StampVerdict::kTimeJump && config_.node.reset_on_time_jump) {
+    ROS_WARN("%s: joint_states stamp jumped back in time: reset to the prior", name_.c_str());
+    ++counters.time_jump_resets;
+    startRun();
+    v = timeline_.addSample(msg->header.stamp, conv.measurement, now);
+  }
+  if (v != StampVerdict::kAccepted) {
+    rejectSample(toString(v), "stamp " + std::to_string(msg->header.stamp.toSec()));
+    return;
+  }
+  processReleased();
+}
+
+void EstimatorRos::onRoad(const RoadProfile::ConstPtr& msg) {
+  const double now = steadySeconds();
+  EstimatorCounters& counters = diagnostics_.counters();
+  ++counters.road_received;
+  StampVerdict v = timeline_.addRoad(msg->header.stamp, msg->left, msg->right, now);
+  if (v == StampVerdict::kTimeJump && config_.node.reset_on_time_jump) {
+    ROS_WARN("%s: road/profile stamp jumped back in time: reset to the prior", name_.c_str());
+    ++counters.time_jump_resets;
+    startRun();
+    v = timeline_.addRoad(msg->header.stamp, msg->left, msg->right, now);
+  }
+  if (v == StampVerdict::kAccepted) {
+    ++counters.road_accepted;
+    processReleased();
+    return;
+  }
+  ++counters.road_rejected[toString(v)];
+  if (v != StampVerdict::kIgnored) {
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: road/profile rejected (%s), stamp %.9f", name_.c_str(),
+                      toString(v), msg->header.stamp.toSec());
+  }
+}
+
+void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
+  if (timeline_.pendingCount() > 0) processReleased();
+}
+
+void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
+  updateRunState();
+  diagnostics_.publish();
+}
+
+void EstimatorRos::updateRunState() {
+  std::string origin;
+  if (const auto o = timeline_.origin()) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%u.%09u", o->sec, o->nsec);
+    origin = text;
+  }
+  diagnostics_.setRunState(toString(timeline_.mode()), origin, timeline_.pendingCount(),
+                           timeline_.roadCount());
+}
+
+void EstimatorRos::processReleased() {
+  DroppedSamples dropped;
+  const std::vector<ReleasedSample> ready = timeline_.release(steadySeconds(), &dropped);
+  if (dropped.no_road > 0) {
+    diagnostics_.counters().samples_rejected["no_road"] += dropped.no_road;
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: no road/profile data within %.3f s (road.source: topic)",
+                      name_.c_str(), config_.node.road_wait_timeout);
+  }
+  if (dropped.before_origin > 0) {
+    diagnostics_.counters().samples_rejected["before_origin"] += dropped.before_origin;
+  }
+  for (const ReleasedSample& s : ready) process(s);
+}
+
+void EstimatorRos::process(const ReleasedSample& sample) {
+  EstimatorCounters& counters = diagnostics_.counters();
+  if (!run_) {
+    std::shared_ptr<const PcPropagator> propagator = analytic_propagator_;
+    if (timeline_.mode() == RoadMode::kTopic) {
+      propagator = makePropagator(config_, makeModel(config_, timeline_.road()));
+    }
+    run_ = std::make_unique<EstimatorRun>(config_, propagator, pdfs_);
+  }
+  if (sample.road_held) {
+    ++counters.road_wait_expired;
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "%s: road data did not reach t = %.6f s within %.3f s; road held at its "
+                      "last value",
+                      name_.c_str(), sample.measurement.time, config_.node.road_wait_timeout);
+  }
+  const double start = steadySeconds();
+  SampleEstimate e;
+  try {
+    e = run_->process(sample.measurement, sample.stamp);
+  } catch (const std::invalid_argument& err) {  // checked before; the filter has the last word
+    rejectSample("filter_refused", err.what());
+    return;
+  }
+  const double done = steadySeconds();
+  estimate_pub_.publish(e.estimate);
+  if (e.pdf) pdf_pub_.publish(*e.pdf);
+  timeline_.keepRoadFrom(run_->oldestTime());
+
+  ++counters.samples_processed;
+  counters.non_finite_updates += e.non_finite + e.coherence_non_finite;
+  counters.batch_not_kept += e.batch_full;
+  if (e.non_finite) {
+    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: non-finite filter update at t = %.6f s (sample %u)",
+                       name_.c_str(), sample.measurement.time, e.estimate.sample_index);
+  }
+  LastUpdate& last = diagnostics_.last();
+  last.any = true;
+  last.sample_index = e.estimate.sample_index;
+  last.time = sample.measurement.time;
+  last.latency = done - sample.arrival;
+  last.compute = done - start;
+  last.health = e.health;
+  last.coherence_flagged = e.estimate.coherence_flagged;
+  last.healthy = e.estimate.healthy;
+  last.non_finite = e.non_finite;
+  last.warnings = e.estimate.warnings;
+}
+
+bool EstimatorRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  const int samples = run_ ? run_->samples() : 0;
+  startRun();
+  ++diagnostics_.counters().resets;
+  diagnostics_.last() = LastUpdate{};
+  const EstimatorRun prior(config_, prior_propagator_, nullptr);
+  const ParameterEstimate msg = prior.priorEstimate(ros::Time::now());
+  estimate_pub_.publish(msg);
+  std::string text = "reset after " + std::to_string(samples) + " samples; prior";
+  for (std::size_t i = 0; i < msg.names.size(); ++i) {
+    text += (i ? ", " : ": ") + msg.names[i] + " " + std::to_string(msg.mean[i]) + " +- " +
+            std::to_string(msg.stddev[i]);
+  }
+  res.success = true;
+  res.message = text;
+  ROS_INFO("%s: %s", name_.c_str(), text.c_str());
+  return true;
+}
+
+bool EstimatorRos::onEstimateBatch(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
+  if (!run_) {
+    res.success = false;
+    res.message = toString(config_.node.batch_method) + ": no samples since the last reset";
+    return true;
+  }
+  const BatchEstimate b = run_->batch(timeline_.roadHistoryComplete());
+  if (b.ok) batch_pub_.publish(b.estimate);
+  res.success = b.ok;
+  res.message = b.summary;
+  ROS_INFO("%s: ~estimate_batch: %s", name_.c_str(), b.summary.c_str());
+  return true;
+}
+
+}  // namespace pc_ekf

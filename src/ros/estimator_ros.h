@@ -1,0 +1,64 @@
+// estimator_node's logic, shared by the executable and the nodelet
+// (pc_ekf/EstimatorNodelet): converts messages, orders and queues samples
+// (EstimatorTimeline), runs the filters (EstimatorRun), publishes and reports.
+// All names are relative (several vehicles side by side in namespaces).
+// Callbacks, timers and services must run on one thread (ros::spin, or the
+// nodelet's single-threaded queue): nothing here is locked.
+#pragma once
+
+#include <pc_ekf/RoadProfile.h>
+#include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
+#include <std_srvs/Trigger.h>
+
+#include <memory>
+#include <string>
+
+#include "filter/pc_propagator.h"
+#include "io/estimator_config.h"
+#include "ros/estimator_diagnostics.h"
+#include "ros/estimator_run.h"
+#include "ros/estimator_timeline.h"
+#include "ros/message_conversion.h"
+
+namespace pc_ekf {
+
+class EstimatorRos {
+ public:
+  // Reads the configuration (ros_config.h) and starts. Throws ConfigError
+  // naming the key and value when the configuration is invalid.
+  EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name);
+
+ private:
+  void onJointState(const sensor_msgs::JointState::ConstPtr& msg);
+  void onRoad(const RoadProfile::ConstPtr& msg);
+  void onWaitTimer(const ros::WallTimerEvent&);
+  void onDiagnosticsTimer(const ros::WallTimerEvent&);
+  bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+  bool onEstimateBatch(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
+
+  // Feeds the filter every sample the timeline releases and publishes.
+  void processReleased();
+  void process(const ReleasedSample& sample);
+  void startRun();
+  void rejectSample(const std::string& reason, const std::string& detail);
+  void updateRunState();
+
+  std::string name_;
+  EstimatorConfig config_;
+  SuspensionJoints joints_;
+  ros::NodeHandle nh_, pnh_;
+  std::shared_ptr<const PcPropagator> analytic_propagator_;  // null for road.source: topic
+  std::shared_ptr<const PcPropagator> prior_propagator_;     // for the prior message
+  std::shared_ptr<const ParameterPdfSampler> pdfs_;          // null: no parameter_pdf
+  EstimatorTimeline timeline_;
+  std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
+  EstimatorDiagnostics diagnostics_;
+
+  ros::Subscriber joint_state_sub_, road_sub_;
+  ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;
+  ros::ServiceServer reset_srv_, batch_srv_;
+  ros::WallTimer wait_timer_, diagnostics_timer_;
+};
+
+}  // namespace pc_ekf

@@ -1,0 +1,184 @@
+#include "ros/estimator_run.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "filter/batch_update.h"
+#include "io/estimation_setup.h"
+#include "pc/pc_statistics.h"
+#include "ros/message_conversion.h"
+
+namespace pc_ekf {
+namespace {
+
+bool finiteResult(const StepResult& r) {
+  return !r.health.non_finite && r.mean.allFinite() && r.stddev.allFinite() &&
+         r.coefficients.allFinite();
+}
+
+// The state before a non-finite update, reported in place of the update.
+StepResult fallbackResult(const StepResult& bad, const OneStepFilter& filter) {
+  StepResult r = bad;
+  r.coefficients = filter.state().bottomRows(filter.propagator().parameterCount());
+  r.mean = pcMean(r.coefficients);
+  r.stddev = pcStddev(r.coefficients);
+  r.health.non_finite = true;
+  return r;
+}
+
+void zero(double& v) {
+  if (!std::isfinite(v)) v = 0.0;
+}
+
+}  // namespace
+
+void zeroNonFinite(ParameterEstimate& msg) {
+  for (auto* array : {&msg.mean, &msg.stddev, &msg.xi_mean, &msg.xi_stddev, &msg.coefficients,
+                      &msg.mass_outside_support, &msg.coherence_disagreement}) {
+    for (double& v : *array) zero(v);
+  }
+  for (double* v : {&msg.time, &msg.nis, &msg.nis_lower, &msg.nis_upper, &msg.nis_window_mean,
+                    &msg.nis_window_lower, &msg.nis_window_upper}) {
+    zero(*v);
+  }
+}
+
+EstimatorRun::EstimatorRun(const EstimatorConfig& config,
+                           std::shared_ptr<const PcPropagator> propagator,
+                           std::shared_ptr<const ParameterPdfSampler> pdfs)
+    : config_(config),
+      propagator_(propagator),
+      pdfs_(std::move(pdfs)),
+      full_(propagator, makeOneStepSettings(config)),
+      decimated_(propagator, makeOneStepSettings(config)) {}
+
+double EstimatorRun::oldestTime() const {
+  return config_.node.coherence_check ? std::min(full_.time(), decimated_.time()) : full_.time();
+}
+
+ParameterEstimate EstimatorRun::message(const StepResult& r, const ros::Time& stamp) const {
+  EstimateContext context;
+  context.stamp = stamp;
+  context.method = "one_step";
+  context.update_rule = toString(config_.update);
+  return estimateMessage(r, *propagator_, full_.settings().health, context);
+}
+
+SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stamp) {
+  SampleEstimate out;
+  const Eigen::MatrixXd before = full_.state();
+  const double time_before = full_.time();
+  StepResult r = full_.process(m);
+  if (!finiteResult(r)) {
+    // Keep the filter usable: the sample is skipped, its index still counted.
+    full_.restore(before, time_before, r.index);
+    r = fallbackResult(r, full_);
+    out.non_finite = true;
+  }
+  out.health = r.health;
+
+  const int k = config_.health.coherence_decimation;
+  if (config_.node.coherence_check && r.index % k == 0) {
+    const Eigen::MatrixXd coarse_before = decimated_.state();
+    const double coarse_time = decimated_.time();
+    const StepResult d = decimated_.process(m);
+    if (finiteResult(d) && !out.non_finite) {
+      disagreement_ = coherenceDisagreement(r.mean, r.stddev, d.mean, d.stddev);
+    } else if (!finiteResult(d)) {
+      decimated_.restore(coarse_before, coarse_time, d.index);
+      out.coherence_non_finite = true;
+    }
+  }
+
+  out.estimate = message(r, stamp);
+  if (disagreement_) {
+    setCoherence(out.estimate, *disagreement_, k, config_.health.coherence_threshold);
+  }
+  if (out.non_finite) {
+    out.estimate.healthy = false;
+    out.estimate.warnings.push_back(
+        "update produced non-finite values: sample not used, parameters are those before it");
+    zeroNonFinite(out.estimate);
+  }
+
+  if (batch_series_.size() < static_cast<std::size_t>(config_.node.max_batch_samples)) {
+    batch_series_.push_back(m);
+    batch_last_stamp_ = stamp;
+  } else {
+    out.batch_full = true;
+  }
+
+  if (pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite()) {
+    std::vector<Histogram> histograms;
+    for (Eigen::Index i = 0; i < r.coefficients.rows(); ++i) {
+      histograms.push_back(
+          pdfs_->histogram(static_cast<int>(i), r.coefficients.row(i).transpose()));
+    }
+    out.pdf = pdfMessage(propagator_->mapping().names(), histograms, {}, r.index, stamp);
+  }
+  return out;
+}
+
+ParameterEstimate EstimatorRun::priorEstimate(const ros::Time& stamp) const {
+  StepResult r;
+  r.coefficients = propagator_->priorState().bottomRows(propagator_->parameterCount());
+  r.mean = pcMean(r.coefficients);
+  r.stddev = pcStddev(r.coefficients);
+  r.health.mass_outside_support = Eigen::VectorXd::Zero(r.mean.size());
+  return message(r, stamp);
+}
+
+BatchEstimate EstimatorRun::batch(bool road_complete) const {
+  BatchEstimate out;
+  const std::string method = toString(config_.node.batch_method);
+  if (batch_series_.empty()) {
+    out.summary = method + ": no samples since the last reset";
+    return out;
+  }
+  if (!road_complete) {
+    out.summary = method +
+                  ": road samples since t = 0 were discarded (node.max_road_samples); "
+                  "call ~reset to start a new record";
+    return out;
+  }
+  const std::vector<double> alphas = config_.node.batch_method == BatchMethod::kEsMda
+                                         ? config_.es_mda.alphas
+                                         : std::vector<double>{1.0};
+  const BatchResult b =
+      batchUpdate(*propagator_, batch_series_, makeNoiseModel(config_), config_.update, alphas);
+  const bool finite =
+      b.finite && b.mean.allFinite() && b.stddev.allFinite() && b.coefficients.allFinite();
+  std::ostringstream s;
+  s << method << " (" << toString(config_.update) << ", " << b.iterations << " iterations) over "
+    << batch_series_.size() << " samples";
+  if (!finite || !b.forecast.ok) {
+    s << ": failed (" << (finite ? "forecast failed" : "non-finite result")
+      << (b.forecast.first_problem.empty() ? "" : ": " + b.forecast.first_problem)
+      << "); nothing published";
+    out.summary = s.str();
+    return out;
+  }
+  ParameterEstimate& msg = out.estimate;
+  msg.header.stamp = batch_last_stamp_;
+  msg.sample_index = static_cast<std::uint32_t>(batch_series_.size());
+  msg.time = batch_series_.back().time;
+  msg.method = method;
+  msg.update_rule = toString(config_.update);
+  setParameters(msg, propagator_->mapping(), b.mean, b.stddev);
+  setBasis(msg, propagator_->basis());
+  setCoefficients(msg, b.coefficients);
+  msg.nis = b.nis;
+  msg.nis_channels = static_cast<std::uint32_t>(b.observations);
+  msg.band_nested = true;
+  msg.healthy = true;
+  if (!b.forecast.first_problem.empty()) msg.warnings.push_back(b.forecast.first_problem);
+  s.precision(9);
+  for (std::size_t i = 0; i < msg.names.size(); ++i) {
+    s << (i ? ", " : ": ") << msg.names[i] << " " << msg.mean[i] << " +- " << msg.stddev[i];
+  }
+  out.summary = s.str();
+  out.ok = true;
+  return out;
+}
+
+}  // namespace pc_ekf

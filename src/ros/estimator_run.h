@@ -1,0 +1,76 @@
+// The estimation state of one run of estimator_node (from start or ~reset to
+// the next): the one-step filter on every sample, a second one-step filter on
+// every k-th sample for the multi-rate coherence check (SPEC §3.6), and the
+// samples kept for the batch update (~estimate_batch). Messages out, core in.
+#pragma once
+
+#include <pc_ekf/ParameterEstimate.h>
+#include <pc_ekf/ParameterPdf.h>
+#include <ros/time.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "filter/one_step_filter.h"
+#include "io/estimator_config.h"
+#include "ros/estimator_pdf.h"
+
+namespace pc_ekf {
+
+struct SampleEstimate {
+  ParameterEstimate estimate;
+  std::optional<ParameterPdf> pdf;
+  // The update produced NaN/Inf: the filter went back to its state before the
+  // sample and the message carries that state with non_finite = true.
+  bool non_finite = false;
+  bool coherence_non_finite = false;  // the same for the decimated filter
+  bool batch_full = false;            // not kept for ~estimate_batch (max_batch_samples)
+  HealthStatus health;
+};
+
+struct BatchEstimate {
+  bool ok = false;
+  std::string summary;  // the ~estimate_batch reply
+  ParameterEstimate estimate;
+};
+
+class EstimatorRun {
+ public:
+  // `pdfs` null: no parameter_pdf messages.
+  EstimatorRun(const EstimatorConfig& config, std::shared_ptr<const PcPropagator> propagator,
+               std::shared_ptr<const ParameterPdfSampler> pdfs);
+
+  // Forecast to m.time and update; m.time must not be before time().
+  SampleEstimate process(const Measurement& m, const ros::Time& stamp);
+  // ES-MDA or whole-set (config node.batch_method) over the kept samples.
+  // `road_complete` false: the road since t = 0 is gone, refuse.
+  BatchEstimate batch(bool road_complete) const;
+  // The prior as a message (sample_index 0).
+  ParameterEstimate priorEstimate(const ros::Time& stamp) const;
+
+  int samples() const { return full_.samples(); }
+  double time() const { return full_.time(); }
+  // Earliest time a filter will integrate from (road before it is not needed
+  // by the one-step filters).
+  double oldestTime() const;
+  std::size_t batchSamples() const { return batch_series_.size(); }
+
+ private:
+  ParameterEstimate message(const StepResult& r, const ros::Time& stamp) const;
+
+  EstimatorConfig config_;
+  std::shared_ptr<const PcPropagator> propagator_;
+  std::shared_ptr<const ParameterPdfSampler> pdfs_;
+  OneStepFilter full_;
+  OneStepFilter decimated_;
+  std::optional<Eigen::VectorXd> disagreement_;  // last multi-rate comparison
+  MeasurementSeries batch_series_;
+  ros::Time batch_last_stamp_;
+};
+
+// Replaces every non-finite number of a message by 0 (documented in the
+// README: only after a non-finite update, which the flags report).
+void zeroNonFinite(ParameterEstimate& msg);
+
+}  // namespace pc_ekf

@@ -1,0 +1,131 @@
+#include "ros/estimator_timeline.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "ros/message_conversion.h"
+
+namespace pc_ekf {
+
+const char* toString(StampVerdict v) {
+  switch (v) {
+    case StampVerdict::kAccepted:
+      return "accepted";
+    case StampVerdict::kDuplicate:
+      return "duplicate_stamp";
+    case StampVerdict::kOutOfOrder:
+      return "out_of_order";
+    case StampVerdict::kTimeJump:
+      return "time_jump";
+    case StampVerdict::kBeforeOrigin:
+      return "before_origin";
+    case StampVerdict::kNonFinite:
+      return "non_finite";
+    case StampVerdict::kIgnored:
+      return "ignored";
+  }
+  return "?";
+}
+
+EstimatorTimeline::EstimatorTimeline(const TimelineSettings& settings) : settings_(settings) {
+  reset();
+}
+
+void EstimatorTimeline::reset() {
+  mode_ = RoadMode::kUndecided;
+  origin_.reset();
+  last_road_.reset();
+  last_sample_.reset();
+  // A new buffer, not a cleared one: the previous run's model may still hold it.
+  road_ = std::make_shared<SampledRoad>();
+  road_history_complete_ = true;
+  last_road_arrival_ = 0.0;
+  road_needed_from_ = 0.0;
+  pending_.clear();
+}
+
+StampVerdict EstimatorTimeline::order(const std::optional<ros::Time>& last,
+                                      const ros::Time& stamp) const {
+  if (!last || stamp > *last) return StampVerdict::kAccepted;
+  if (stamp == *last) return StampVerdict::kDuplicate;
+  return (*last - stamp).toSec() > settings_.time_jump_tolerance ? StampVerdict::kTimeJump
+                                                                 : StampVerdict::kOutOfOrder;
+}
+
+StampVerdict EstimatorTimeline::addRoad(const ros::Time& stamp, double left, double right,
+                                        double arrival) {
+  if (!std::isfinite(left) || !std::isfinite(right)) return StampVerdict::kNonFinite;
+  if (mode_ == RoadMode::kAnalytic) return StampVerdict::kIgnored;
+  const StampVerdict v = order(last_road_, stamp);
+  if (v != StampVerdict::kAccepted) return v;
+  if (mode_ == RoadMode::kUndecided) {
+    mode_ = RoadMode::kTopic;
+    origin_ = stamp;
+  }
+  road_->append(secondsSince(stamp, *origin_), left, right);
+  last_road_ = stamp;
+  last_road_arrival_ = arrival;
+  boundRoad();
+  return StampVerdict::kAccepted;
+}
+
+void EstimatorTimeline::boundRoad() {
+  if (road_->size() <= settings_.max_road) return;
+  const std::size_t before = road_->size();
+  road_->discardBefore(road_needed_from_);
+  if (road_->size() < before) road_history_complete_ = false;
+}
+
+StampVerdict EstimatorTimeline::addSample(const ros::Time& stamp, const Measurement& m,
+                                          double arrival) {
+  const StampVerdict v = order(last_sample_, stamp);
+  if (v != StampVerdict::kAccepted) return v;
+  if (mode_ == RoadMode::kTopic && stamp < *origin_) return StampVerdict::kBeforeOrigin;
+  pending_.push_back({stamp, m, arrival});
+  last_sample_ = stamp;
+  return StampVerdict::kAccepted;
+}
+
+std::vector<ReleasedSample> EstimatorTimeline::release(double now, DroppedSamples* dropped) {
+  std::vector<ReleasedSample> out;
+  while (!pending_.empty()) {
+    Pending& p = pending_.front();
+    const double waiting_since = std::max(p.arrival, last_road_arrival_);
+    const bool expired = now - waiting_since >= settings_.road_wait_timeout ||
+                         pending_.size() > settings_.max_pending;
+    if (mode_ == RoadMode::kUndecided) {
+      if (!expired) break;
+      if (settings_.road_topic_required) {
+        ++dropped->no_road;
+        pending_.pop_front();
+        continue;
+      }
+      mode_ = RoadMode::kAnalytic;
+      try {
+        origin_ = stampAt(p.stamp, -settings_.analytic_interval);
+      } catch (const std::invalid_argument&) {
+        origin_ = ros::Time(0, 0);  // stamps near zero (sim time): t = stamp
+      }
+    }
+    const double t = secondsSince(p.stamp, *origin_);
+    bool held = false;
+    if (mode_ == RoadMode::kTopic) {
+      if (t < 0.0) {
+        ++dropped->before_origin;
+        pending_.pop_front();
+        continue;
+      }
+      const bool covered = road_->lastTime() >= t;
+      if (!covered && !expired) break;
+      held = !covered;
+    }
+    ReleasedSample r{p.stamp, std::move(p.measurement), p.arrival, held};
+    r.measurement.time = t;
+    out.push_back(std::move(r));
+    pending_.pop_front();
+  }
+  return out;
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,109 @@
+#include "ros/ros_config.h"
+
+#include <ros/param.h>
+
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+namespace pc_ekf {
+namespace {
+
+// Shortest decimal text that parses back to the same double.
+std::string exactText(double v) {
+  char buffer[40];
+  for (int digits = 15; digits <= 17; ++digits) {
+    std::snprintf(buffer, sizeof(buffer), "%.*g", digits, v);
+    if (std::strtod(buffer, nullptr) == v) break;
+  }
+  return buffer;
+}
+
+YAML::Node loadYamlFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open the configuration file (param ~config_file)");
+  std::stringstream text;
+  text << in.rdbuf();
+  try {
+    return YAML::Load(text.str());
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": line " + std::to_string(e.mark.line + 1) + ": not valid YAML (" +
+                      e.msg + ")");
+  }
+}
+
+}  // namespace
+
+YAML::Node yamlFromXmlRpc(const XmlRpc::XmlRpcValue& value) {
+  XmlRpc::XmlRpcValue v = value;  // the accessors are non-const
+  switch (v.getType()) {
+    case XmlRpc::XmlRpcValue::TypeBoolean:
+      return YAML::Node(static_cast<bool>(v) ? "true" : "false");
+    case XmlRpc::XmlRpcValue::TypeInt:
+      return YAML::Node(std::to_string(static_cast<int>(v)));
+    case XmlRpc::XmlRpcValue::TypeDouble:
+      return YAML::Node(exactText(static_cast<double>(v)));
+    case XmlRpc::XmlRpcValue::TypeString:
+      return YAML::Node(static_cast<std::string>(v));
+    case XmlRpc::XmlRpcValue::TypeArray: {
+      YAML::Node seq(YAML::NodeType::Sequence);
+      for (int i = 0; i < v.size(); ++i) seq.push_back(yamlFromXmlRpc(v[i]));
+      return seq;
+    }
+    case XmlRpc::XmlRpcValue::TypeStruct: {
+      YAML::Node map(YAML::NodeType::Map);
+      for (auto it = v.begin(); it != v.end(); ++it) map[it->first] = yamlFromXmlRpc(it->second);
+      return map;
+    }
+    default:
+      return YAML::Node(v.toXml());  // date/binary: refused by the schema as text
+  }
+}
+
+void mergeYaml(YAML::Node& base, const YAML::Node& overlay) {
+  if (!base.IsMap() || !overlay.IsMap()) {
+    base = overlay;
+    return;
+  }
+  for (const auto& kv : overlay) {
+    const std::string key = kv.first.as<std::string>();
+    if (base[key].IsMap() && kv.second.IsMap()) {
+      YAML::Node child = base[key];
+      mergeYaml(child, kv.second);
+    } else {
+      base[key] = YAML::Clone(kv.second);
+    }
+  }
+}
+
+EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh) {
+  const std::string ns = private_nh.getNamespace();
+  std::string file;
+  private_nh.getParam(kConfigFileParam, file);
+
+  YAML::Node params(YAML::NodeType::Map);
+  XmlRpc::XmlRpcValue all;
+  if (ros::param::get(ns, all) && all.getType() == XmlRpc::XmlRpcValue::TypeStruct) {
+    for (auto it = all.begin(); it != all.end(); ++it) {
+      if (it->first == kConfigFileParam || it->first == kDiagnosticPeriodParam) continue;
+      params[it->first] = yamlFromXmlRpc(it->second);
+    }
+  }
+
+  std::string source;
+  YAML::Node root(YAML::NodeType::Map);
+  if (!file.empty()) {
+    root = loadYamlFile(file);
+    if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
+    if (!root.IsMap()) return parseConfig(root, file);  // reports the wrong root type
+    source = file;
+  }
+  if (params.size() > 0) {
+    mergeYaml(root, params);
+    source = source.empty() ? "rosparam " + ns : source + " + rosparam " + ns;
+  }
+  if (source.empty()) source = "defaults (no ~config_file, no private parameters)";
+  return parseConfig(root, source);
+}
+
+}  // namespace pc_ekf
