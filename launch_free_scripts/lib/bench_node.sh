@@ -1,0 +1,86 @@
+#!/usr/bin/env bash
+# Part of bench.sh: estimator_node end to end. Synthesises a bag of
+# 10^4 samples (1 kHz for 10 s, the paper's speed bump and noise), starts its
+# own roscore on a free port, estimator_node and a counter
+# (bench_node_throughput), replays the bag with replay_node at full speed
+# (rate 0, no handshake: the node must keep up through its queues), and
+# reports the estimates received per second from first to last, how many
+# were lost, and the node's peak RSS (VmHWM). Stops what it started, by PID.
+#   bench_node.sh BIN_DIR OUT_DIR     -> OUT_DIR/node.json
+# Writes null figures (with the reason) when the executables are missing.
+set -uo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+source "$here/common.sh"
+source "$here/roscore.sh"
+
+bin=$1
+out=$2
+samples=${PC_EKF_BENCH_NODE_SAMPLES:-10000}
+duration=$(awk -v n="$samples" 'BEGIN { printf "%g", n / 1000 }')  # 1 kHz
+mkdir -p "$out"
+json="$out/node.json"
+
+write_null() {
+  printf '{"node_samples_per_s": null, "node_peak_rss_mb": null, "reason": "%s"}\n' "$1" >"$json"
+  pc_ekf_log "node benchmark skipped: $1"
+  exit 0
+}
+
+for exe in estimator_node replay_node synthesize_bag bench_node_throughput; do
+  [ -x "$bin/$exe" ] || write_null "$exe not built"
+done
+
+trap pc_ekf_stop_owned EXIT
+trap 'exit 130' INT TERM
+pc_ekf_source_workspace
+
+config="$out/speed_bump_1khz.yaml"
+sed -E -e "/^sampling:/,/^[a-z]/ s/^(  samples:) *[0-9]+/\1 $samples/" \
+  -e "/^sampling:/,/^[a-z]/ s/^(  duration:) *[0-9.]+/\1 $duration/" \
+  "$PC_EKF_ROOT/config/speed_bump.yaml" >"$config"
+grep -qE "^  samples: $samples\b" "$config" || write_null "cannot set sampling.samples in the config"
+bag="$out/speed_bump_1khz.bag"
+"$bin/synthesize_bag" --config "$config" --output "$bag" >"$out/synthesize_bag.log" 2>&1 ||
+  write_null "synthesize_bag failed (see node/synthesize_bag.log)"
+
+pc_ekf_roscore_start "$out/roscore.log" || write_null "roscore did not start"
+pc_ekf_start_owned estimator_node "$out/estimator_node.log" \
+  "$bin/estimator_node" "_config_file:=$config" __name:=estimator_node
+estimator=$PC_EKF_LAST_PID
+rm -f "$out/ready"
+pc_ekf_start_owned counter "$out/counter.log" "$bin/bench_node_throughput" \
+  "_expect:=$samples" _timeout:=30 "_ready:=$out/ready" __name:=bench_node_throughput
+counter=$PC_EKF_LAST_PID
+for _ in $(seq 600); do
+  [ -e "$out/ready" ] && break
+  kill -0 "$estimator" 2>/dev/null && kill -0 "$counter" 2>/dev/null || break
+  sleep 0.1
+done
+[ -e "$out/ready" ] || write_null "estimator_node did not come up (see node/estimator_node.log)"
+
+start=$(date +%s.%N)
+pc_ekf_start_owned replay_node "$out/replay_node.log" "$bin/replay_node" "_bag:=$bag" \
+  _rate:=0 _lossless:=false __name:=replay_node
+replay=$PC_EKF_LAST_PID
+wait "$counter"
+end=$(date +%s.%N)
+# Peak resident set of the estimator over the run (kB), read before stopping it.
+rss_kb=$(awk '/^VmHWM:/ { print $2 }' "/proc/$estimator/status" 2>/dev/null)
+wait "$replay" 2>/dev/null
+counts=$(tail -n 1 "$out/counter.log")
+/usr/bin/python3 - "$counts" "${rss_kb:-}" "$samples" "$start" "$end" >"$json" <<'PY'
+import json, sys
+counts = json.loads(sys.argv[1]) if sys.argv[1].startswith("{") else {}
+rss = float(sys.argv[2]) / 1024.0 if sys.argv[2] else None
+expected = int(sys.argv[3])
+received = counts.get("received", 0)
+print(json.dumps({
+    "node_samples_per_s": counts.get("samples_per_s") if received > 1 else None,
+    "node_peak_rss_mb": rss,
+    "node_samples_expected": expected,
+    "node_samples_received": received,
+    "node_samples_lost": expected - received,
+    "node_replay_wall_s": float(sys.argv[5]) - float(sys.argv[4]),
+}))
+PY
+pc_ekf_log "node: $(cat "$json")"

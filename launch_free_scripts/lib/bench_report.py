@@ -1,0 +1,239 @@
+#!/usr/bin/python3
+"""bench.sh's report: reads the Google Benchmark JSON outputs (DIR/raw/*.json)
+and the node measurement (DIR/node/node.json), writes DIR/bench.json (the
+issue's keys first, then every detail) and prints one table.
+
+Usage: bench_report.py DIR [ELAPSED_SECONDS]
+"""
+import datetime
+import json
+import math
+import os
+import pathlib
+import platform
+import subprocess
+import sys
+
+out = pathlib.Path(sys.argv[1])
+elapsed = float(sys.argv[2]) if len(sys.argv) > 2 else None
+
+
+def load(name):
+    path = out / "raw" / f"{name}.json"
+    if not path.exists():
+        return {}
+    try:
+        data = json.loads(path.read_text())
+    except json.JSONDecodeError:
+        return {}
+    return {b["name"]: b for b in data.get("benchmarks", []) if b.get("run_type") != "aggregate"}
+
+
+one_step = load("bench_one_step")
+integrator = load("bench_integrator")
+scaling = load("bench_scaling")
+propagation = load("bench_propagation")
+enkf = load("bench_enkf")
+posterior = load("bench_posterior")
+try:
+    node = json.loads((out / "node" / "node.json").read_text())
+except (OSError, json.JSONDecodeError):
+    node = {"node_samples_per_s": None, "node_peak_rss_mb": None, "reason": "no node.json"}
+
+
+def get(table, name, counter):
+    v = table.get(name, {}).get(counter)
+    if v is None or (isinstance(v, float) and not math.isfinite(v)):
+        return None
+    return v
+
+
+paper = "BM_OneStepPaper/40/0/iterations:1"
+paper_rk4 = "BM_OneStepPaper/40/1/iterations:1"
+paper_dp5 = "BM_OneStepPaper/40/2/iterations:1"
+khz = "BM_OneStep1kHz/10/0/iterations:1"
+khz_dp5 = "BM_OneStep1kHz/10/2/iterations:1"
+pcmc = "BM_PcVersusMonteCarlo/iterations:1"
+enkf_name = "BM_EnkfEqualAccuracy/iterations:1"
+post = "BM_ReferencePosteriorCaseB/2/iterations:1/real_time"
+
+members = get(enkf, enkf_name, "equal_accuracy_members")
+
+result = {
+    "real_time_factor": get(one_step, paper, "real_time_factor"),
+    "update_latency_median_us": get(one_step, paper, "median_us"),
+    "update_latency_p99_us": get(one_step, paper, "p99_us"),
+    "update_latency_p99_us_1khz": get(one_step, khz, "p99_us"),
+    "update_latency_median_us_1khz": get(one_step, khz, "median_us"),
+    "mc_propagation_sample_ratio": get(propagation, pcmc, "sample_ratio"),
+    "mc_propagation_wall_ratio": get(propagation, pcmc, "wall_ratio"),
+    "enkf_equal_accuracy_members": None if members is None or members < 0 else members,
+    "enkf_wall_ratio": None if members is None or members < 0 else get(enkf, enkf_name, "wall_ratio"),
+    "enkf_integration_ratio": None if members is None or members < 0 else get(enkf, enkf_name, "integration_ratio"),
+    "wholeset_1e4_update_s": get(scaling, "BM_WholeSet/10000/iterations:1", "beyond_forecast_s"),
+    "reference_posterior_s": get(posterior, post, "wall_s"),
+    "node_samples_per_s": node.get("node_samples_per_s"),
+    "node_peak_rss_mb": node.get("node_peak_rss_mb"),
+}
+
+details = {
+    "one_step": {k: {c: v for c, v in b.items() if c not in ("family_index", "per_family_instance_index", "run_name", "run_type", "repetitions", "repetition_index", "threads", "iterations", "time_unit")}
+                 for k, b in one_step.items()},
+    "integrator_accuracy_cost": [
+        {"method": "dp5" if b.get("dp5") else "rk4", "max_step_ms": b.get("max_step_ms"),
+         "error_rel_range": b.get("error_rel_range"), "error_rel_noise": b.get("error_rel_noise"),
+         "us_per_30ms_interval": b.get("us_per_interval")}
+        for k, b in integrator.items() if k.startswith("BM_StepAccuracy")],
+    "update_scaling": [
+        {c: b.get(c) for c in ("n", "p", "S", "Q", "median_us", "p99_us")}
+        for k, b in scaling.items() if k.startswith("BM_UpdateScaling")],
+    "wholeset": [
+        {c: b.get(c) for c in ("samples", "observations", "forecast_s", "stack_project_s",
+                               "kalman_s", "beyond_forecast_s")}
+        for k, b in scaling.items() if k.startswith("BM_WholeSet")],
+    "pc_vs_mc": {k: {c: v for c, v in b.items() if c not in ("family_index", "per_family_instance_index", "run_name", "run_type", "repetitions", "repetition_index", "threads", "iterations", "time_unit")}
+                 for k, b in propagation.items()},
+    "enkf": enkf.get(enkf_name, {}),
+    "reference_posterior_case_b": posterior.get(post, {}),
+    "node": node,
+}
+
+
+def cpu_model():
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor()
+
+
+def git_commit():
+    try:
+        return subprocess.run(["git", "-C", str(pathlib.Path(__file__).resolve().parents[2]),
+                               "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                              check=False).stdout.strip() or None
+    except OSError:
+        return None
+
+
+machine = {
+    "cpu": cpu_model(),
+    "cores": os.cpu_count(),
+    "load_average_at_report": os.getloadavg()[0],
+    "date": datetime.datetime.now().isoformat(timespec="seconds"),
+    "commit": git_commit(),
+    "bench_seconds": elapsed,
+    "timing": "CPU time of the measuring thread, best over passes (one-step: per sample, best of "
+              "40 passes of the record spread over ~4 s; median/p99 over the samples)",
+}
+(out / "bench.json").write_text(json.dumps({**result, "machine": machine, "details": details},
+                                           indent=2) + "\n")
+
+
+def fmt(v, unit="", digits=3):
+    if v is None:
+        return "n/a"
+    if isinstance(v, float):
+        if v != 0 and (abs(v) >= 1e5 or abs(v) < 1e-3):
+            s = f"{v:.{digits}g}"
+        else:
+            s = f"{v:.{digits}g}" if abs(v) < 100 else f"{v:.0f}"
+    else:
+        s = str(v)
+    return s + unit
+
+
+def status(ok):
+    return "n/a" if ok is None else ("met" if ok else "NOT met")
+
+
+rows = []
+
+
+def row(figure, value, target, ok):
+    rows.append((figure, value, target, status(ok)))
+
+
+def cmp(v, op, t):
+    if v is None:
+        return None
+    return v >= t if op == ">=" else v <= t
+
+
+rtf = result["real_time_factor"]
+row("real-time factor, one-step, paper config, 1 thread", fmt(rtf, "x"), ">= 1000x", cmp(rtf, ">=", 1000))
+row("  update latency median / p99 (dt = 30 ms)",
+    f"{fmt(result['update_latency_median_us'], ' us')} / {fmt(result['update_latency_p99_us'], ' us')}",
+    "<= 30 us", cmp(result["update_latency_median_us"], "<=", 30))
+for name, label in ((paper_rk4, "rk4 1 ms"), (paper_dp5, "dp5 3 ms")):
+    v = get(one_step, name, "real_time_factor")
+    if v is not None:
+        row(f"  same with integration {label}",
+            f"{fmt(v, 'x')} ({fmt(get(one_step, name, 'median_us'), ' us')} median)", ">= 1000x",
+            cmp(v, ">=", 1000))
+row("1 kHz stream, update latency p99 (median)",
+    f"{fmt(result['update_latency_p99_us_1khz'], ' us')} ({fmt(result['update_latency_median_us_1khz'], ' us')})",
+    "<= 200 us", cmp(result["update_latency_p99_us_1khz"], "<=", 200))
+e_pc = get(propagation, pcmc, "pc_error")
+row(f"PC (Q = 30) vs MC propagation, MC samples to match (PC error {fmt(e_pc)})",
+    fmt(get(propagation, pcmc, "mc_samples_to_match")), "", None)
+row("  integration ratio MC / PC", fmt(result["mc_propagation_sample_ratio"], "x"), ">= 100x",
+    cmp(result["mc_propagation_sample_ratio"], ">=", 100))
+row("  wall (CPU) ratio MC / PC", fmt(result["mc_propagation_wall_ratio"], "x"), ">= 30x",
+    cmp(result["mc_propagation_wall_ratio"], ">=", 30))
+gauss = "BM_PcOrderVersusMonteCarlo/4/5/iterations:1"
+if gauss in propagation:
+    row(f"  same, 5x5 Gauss points, p = 4 (PC error {fmt(get(propagation, gauss, 'pc_error'))})",
+        f"{fmt(get(propagation, gauss, 'sample_ratio'), 'x')} / {fmt(get(propagation, gauss, 'wall_ratio'), 'x')}",
+        ">= 100x / 30x", cmp(get(propagation, gauss, "sample_ratio"), ">=", 100))
+e = enkf.get(enkf_name, {})
+if e:
+    row(f"EnKF vs PC-EKF error / posterior std (10 seeds): A {fmt(e.get('pc_error_A'))}, "
+        f"B {fmt(e.get('pc_error_B'))} (PC-EKF)", "", "", None)
+    row("  EnKF members for equal accuracy, both cases",
+        fmt(result["enkf_equal_accuracy_members"]) if result["enkf_equal_accuracy_members"] else
+        f"none <= {fmt(e.get('largest_members'))}", "", None)
+    for case in ("A", "B"):
+        m = e.get(f"equal_accuracy_members_{case}")
+        row(f"  case {case}: EnKF members for equal accuracy",
+            fmt(m) if m is not None and m > 0 else f"none <= {fmt(e.get('largest_members'))} "
+            f"(EnKF error {fmt(e.get(f'enkf_best_error_{case}'))})",
+            "", None)
+        if m is not None and m > 0:
+            row(f"  case {case}: EnKF / PC-EKF CPU time, integrations at that size",
+                f"{fmt(e.get(f'wall_ratio_{case}'), 'x')}, {fmt(e.get(f'integration_ratio_{case}'), 'x')}",
+                ">= 2x", cmp(e.get(f"wall_ratio_{case}"), ">=", 2))
+for b in details["update_scaling"]:
+    if (b["n"], b["p"]) in ((2, 2), (2, 8), (4, 2), (4, 4), (4, 8)):
+        row(f"update cost n = {b['n']:.0f}, p = {b['p']:.0f} (S = {b['S']:.0f}, Q = {b['Q']:.0f}), median",
+            fmt(b["median_us"], " us"), "", None)
+for b in details["wholeset"]:
+    row(f"whole-set N = {b['samples']:.0f}: forecast / everything after it",
+        f"{fmt(b['forecast_s'], ' s')} / {fmt(b['beyond_forecast_s'], ' s')}",
+        "< 0.1 s (N = 1e4)" if b["samples"] == 10000 else "linear",
+        cmp(b["beyond_forecast_s"], "<=", 0.1) if b["samples"] == 10000 else None)
+p = posterior.get(post, {})
+row(f"reference posterior case B, 2 threads ({fmt(p.get('simulations'))} simulations)",
+    fmt(result["reference_posterior_s"], " s"), "< 30 s", cmp(result["reference_posterior_s"], "<=", 30))
+row(f"estimator_node, 10^4-sample replay at full speed (lost {fmt(node.get('node_samples_lost'))})",
+    fmt(result["node_samples_per_s"], " samples/s"), ">= 1000/s (1 kHz)",
+    cmp(result["node_samples_per_s"], ">=", 1000))
+row("estimator_node peak RSS", fmt(result["node_peak_rss_mb"], " MB"), "<= 50 MB",
+    cmp(result["node_peak_rss_mb"], "<=", 50))
+
+print()
+print(f"pc_ekf benchmarks - {machine['cpu']}, {machine['cores']} cores, {machine['date']}, "
+      f"commit {machine['commit']}, load {machine['load_average_at_report']:.1f}"
+      + (f", {elapsed:.0f} s" if elapsed else ""))
+widths = [max(len(r[i]) for r in rows + [("figure", "value", "target", "status")]) for i in range(4)]
+header = ("figure", "value", "target", "status")
+line = "  ".join(h.ljust(w) for h, w in zip(header, widths))
+print(line)
+print("-" * len(line))
+for r in rows:
+    print("  ".join(c.ljust(w) for c, w in zip(r, widths)))
+if node.get("reason"):
+    print(f"(node: {node['reason']})")
+print(f"\nwrote {out / 'bench.json'}")

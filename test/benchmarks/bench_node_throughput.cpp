@@ -1,0 +1,68 @@
+// End-to-end throughput of estimator_node (issue 6), for
+// launch_free_scripts/lib/bench_node.sh: a ROS node that counts the
+// estimates on parameter_estimate while replay_node plays a bag into the
+// estimator at full speed. Not a Google Benchmark (it needs the graph).
+//   ~expect (int)     estimates to wait for
+//   ~timeout (s)      give up after this long without a new estimate (default 60)
+//   ~ready (path)     touched once the estimator's publisher is connected
+// Prints one JSON object: received, first_to_last_s, samples_per_s.
+#include <pc_ekf/ParameterEstimate.h>
+#include <ros/ros.h>
+
+#include <chrono>
+#include <cstdio>
+#include <fstream>
+#include <string>
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+struct Counter {
+  long received = 0;
+  Clock::time_point first, last;
+  void onEstimate(const pc_ekf::ParameterEstimate::ConstPtr&) {
+    last = Clock::now();
+    if (received++ == 0) first = last;
+  }
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  ros::init(argc, argv, "bench_node_throughput");
+  ros::NodeHandle nh, pnh("~");
+  int expect = 0;
+  double timeout = 60.0;
+  std::string ready;
+  pnh.getParam("expect", expect);
+  pnh.getParam("timeout", timeout);
+  pnh.getParam("ready", ready);
+  Counter counter;
+  ros::Subscriber sub = nh.subscribe("parameter_estimate", 200000, &Counter::onEstimate, &counter,
+                                     ros::TransportHints().tcpNoDelay());
+  bool announced = false;
+  Clock::time_point quiet_since = Clock::now();
+  long seen = 0;
+  while (ros::ok() && (expect <= 0 || counter.received < expect)) {
+    ros::spinOnce();
+    if (!announced && sub.getNumPublishers() > 0 && !ready.empty()) {
+      std::ofstream(ready.c_str()) << "ready\n";
+      announced = true;
+    }
+    if (counter.received != seen) {
+      seen = counter.received;
+      quiet_since = Clock::now();
+    } else if (std::chrono::duration<double>(Clock::now() - quiet_since).count() > timeout) {
+      break;
+    }
+    ros::WallDuration(0.0002).sleep();
+  }
+  const double span = counter.received > 1
+                          ? std::chrono::duration<double>(counter.last - counter.first).count()
+                          : 0.0;
+  std::printf("{\"received\": %ld, \"expected\": %d, \"first_to_last_s\": %.6f, \"samples_per_s\": %.3f}\n",
+              counter.received, expect, span,
+              span > 0.0 ? static_cast<double>(counter.received - 1) / span : 0.0);
+  return counter.received >= expect ? 0 : 1;
+}

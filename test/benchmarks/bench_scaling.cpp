@@ -1,0 +1,114 @@
+// Scaling (issue 6): cost of one one-step update (forecast over dt = 0.03 s +
+// square-root update + health) for PC order p = 2..8 and n = 2..4 uncertain
+// parameters (Table I: + spring_linear_left, + tyre_stiffness_left), Q = 2S;
+// and the whole-set update for N = 10^2..10^5 samples over the 3 s record,
+// split into the forecast (simulating the Q collocation points through all
+// sample times) and what comes after it (stacking, projection, Kalman update).
+#include "bench_support.h"
+#include "filter/batch_update.h"
+#include "filter/trajectory_simulation.h"
+
+namespace pc_ekf::bench {
+namespace {
+
+EstimatorConfig scalingConfig(int n, int p) {
+  EstimatorConfig c = paperConfig(100);
+  const char* extra[] = {"spring_linear_left", "tyre_stiffness_left"};
+  const double nominal[] = {c.vehicle.spring_linear[0], c.vehicle.tyre_stiffness[0]};
+  for (int i = 2; i < n; ++i) {
+    UncertainParameter u = c.uncertain.front();
+    u.name = extra[i - 2];
+    u.nominal = nominal[i - 2];
+    u.relative_range = 0.1;
+    c.uncertain.push_back(u);
+    c.truth.xi.push_back(0.1);
+  }
+  c.pc_order = p;
+  const long s = [&] {  // C(n + p, p)
+    long r = 1;
+    for (int i = 1; i <= p; ++i) r = r * (n + i) / i;
+    return r;
+  }();
+  c.collocation.points = static_cast<int>(2 * s);
+  return c;
+}
+
+// Median and p99 over the samples of the best-of-passes CPU time per update.
+void BM_UpdateScaling(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0)), p = static_cast<int>(state.range(1));
+  const Scenario s = makeScenario(scalingConfig(n, p));
+  const int samples = 20;  // the first 0.6 s: the bump, the expensive part
+  const int passes = s.propagator->termCount() > 200 ? 2 : 5;
+  OneStepFilter filter(s.propagator, makeOneStepSettings(s.config));
+  std::vector<double> best(samples, INFINITY);
+  for (auto _ : state) {
+    for (int pass = 0; pass < passes; ++pass) {
+      filter.reset();
+      for (int k = 0; k < samples; ++k) {
+        const double c0 = threadCpuSeconds();
+        const StepResult r = filter.process(s.series[k]);
+        best[k] = std::min(best[k], threadCpuSeconds() - c0);
+        benchmark::DoNotOptimize(r.mean.data());
+      }
+    }
+  }
+  state.counters["n"] = n;
+  state.counters["p"] = p;
+  state.counters["S"] = s.propagator->termCount();
+  state.counters["Q"] = s.propagator->design().pointCount();
+  state.counters["median_us"] = 1e6 * quantile(best, 0.5);
+  state.counters["p99_us"] = 1e6 * quantile(best, 0.99);
+}
+BENCHMARK(BM_UpdateScaling)
+    ->ArgsProduct({{2, 3, 4}, {2, 3, 4, 5, 6, 7, 8}})
+    ->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// Whole-set update (paper rule for one pass is the same cost; the config's
+// square-root rule is used) for N samples over 3 s.
+void BM_WholeSet(benchmark::State& state) {
+  const int samples = static_cast<int>(state.range(0));
+  const Scenario s = makeScenario(paperConfig(samples));
+  const PcPropagator& prop = *s.propagator;
+  const Eigen::MatrixXd theta = prop.priorState().bottomRows(prop.parameterCount());
+  const NoiseModel noise = makeNoiseModel(s.config);
+  const std::vector<double> times = sampleTimes(s.series);
+  const int repeats = samples >= 100000 ? 1 : 3;
+  double simulate = INFINITY, record = INFINITY, update = INFINITY;
+  for (auto _ : state) {
+    for (int r = 0; r < repeats; ++r) {
+      // (a) the forecast alone: Q points through every sample time.
+      const Eigen::MatrixXd params = prop.parametersAtPoints(theta, nullptr);
+      double c0 = threadCpuSeconds();
+      const auto channels = simulateChannels(prop.model(), params, times, prop.integration());
+      simulate = std::min(simulate, threadCpuSeconds() - c0);
+      benchmark::DoNotOptimize(channels.data());
+      // (b) forecastRecord = (a) + stacking and projection of 4N observations.
+      ForecastReport report;
+      c0 = threadCpuSeconds();
+      const StackedObservations obs = forecastRecord(prop, theta, s.series, &report);
+      record = std::min(record, threadCpuSeconds() - c0);
+      // (c) the Kalman update of the parameter coefficients with 4N observations.
+      Eigen::MatrixXd updated = theta;
+      const Eigen::VectorXd rv = noise.variances(obs.z);
+      c0 = threadCpuSeconds();
+      const UpdateDiagnostics d = pcKalmanUpdate(updated, obs.z_coeffs, obs.z, rv, s.config.update);
+      update = std::min(update, threadCpuSeconds() - c0);
+      benchmark::DoNotOptimize(d.nis);
+    }
+  }
+  state.counters["samples"] = samples;
+  state.counters["observations"] = 4.0 * samples;
+  state.counters["forecast_s"] = simulate;
+  state.counters["stack_project_s"] = std::max(0.0, record - simulate);
+  state.counters["kalman_s"] = update;
+  // Everything beyond the forecast: stacking, projection and the update.
+  state.counters["beyond_forecast_s"] = std::max(0.0, record - simulate) + update;
+}
+BENCHMARK(BM_WholeSet)
+    ->Arg(100)->Arg(1000)->Arg(10000)->Arg(100000)
+    ->Iterations(1)->Unit(benchmark::kMillisecond);
+
+}  // namespace
+}  // namespace pc_ekf::bench
+
+BENCHMARK_MAIN();
