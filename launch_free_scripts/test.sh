@@ -2,14 +2,27 @@
 # THE test command: installs what is missing, builds, runs every gtest and
 # rostest, and ends with "N passed, N failed" (N = test cases).
 #   --colcon     also check that `colcon build` succeeds (separate workspace)
+#   --sanitize   instead: build .build/catkin_ws_sanitize with ASan + UBSan
+#                (RelWithDebInfo) and run every gtest and rostest there; any
+#                sanitizer report fails the test case sanitizer.reports
+#   --no-fuzz    skip the fuzz step (by default, after the tests: each
+#                test/fuzz target replays its corpus and fuzzes
+#                PC_EKF_FUZZ_SECONDS, default 30 s; one test case per target)
 set -uo pipefail
-source "$(dirname "$0")/lib/common.sh"
+here=$(cd "$(dirname "$0")" && pwd)
+source "$here/lib/common.sh"
+source "$here/lib/fuzz.sh"
+source "$here/lib/sanitize.sh"
 
 check_colcon=0
+sanitize=0
+fuzz=1
 for arg in "$@"; do
   case "$arg" in
     --colcon) check_colcon=1 ;;
-    -h|--help) sed -n '2,5p' "$0"; exit 0 ;;
+    --sanitize) sanitize=1; fuzz=0 ;;
+    --no-fuzz) fuzz=0 ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
     *) echo "test.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
@@ -17,19 +30,42 @@ done
 pc_ekf_ensure_packages || { echo "0 passed, 1 failed"; exit 1; }
 mkdir -p "$PC_EKF_ROOT/.build"
 
+suffix=""
+build_args=()
+if [ "$sanitize" -eq 1 ]; then
+  PC_EKF_WS=$PC_EKF_ROOT/.build/catkin_ws_sanitize
+  export PC_EKF_BUILD_TYPE=RelWithDebInfo
+  mapfile -t build_args < <(pc_ekf_sanitize_cmake_args)
+  suffix=_sanitize
+fi
+
 results="$PC_EKF_WS/build/test_results/pc_ekf"
 rm -rf "$results"
-if ! pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1; then
-  tail -40 "$PC_EKF_ROOT/.build/build.log" >&2
-  pc_ekf_log "build failed (full log: .build/build.log)"
+if ! pc_ekf_catkin_make "${build_args[@]}" >"$PC_EKF_ROOT/.build/build$suffix.log" 2>&1; then
+  tail -40 "$PC_EKF_ROOT/.build/build$suffix.log" >&2
+  pc_ekf_log "build failed (full log: .build/build$suffix.log)"
   echo "0 passed, 1 failed"
   exit 1
 fi
 pc_ekf_log "build ok; running tests"
 
+sanitizer_logs=$PC_EKF_ROOT/.build/sanitizer_reports
+[ "$sanitize" -eq 1 ] && pc_ekf_sanitize_env "$sanitizer_logs"
 extra_failures=0
-if ! (cd "$PC_EKF_WS" && catkin_make run_tests -j"$(nproc)") >"$PC_EKF_ROOT/.build/tests.log" 2>&1; then
-  pc_ekf_log "run_tests returned non-zero (log: .build/tests.log)"
+tests_start=$SECONDS
+if ! (cd "$PC_EKF_WS" && catkin_make run_tests -j"$(nproc)") >"$PC_EKF_ROOT/.build/tests$suffix.log" 2>&1; then
+  pc_ekf_log "run_tests returned non-zero (log: .build/tests$suffix.log)"
+fi
+pc_ekf_log "tests took $((SECONDS - tests_start)) s"
+if [ "$sanitize" -eq 1 ]; then
+  unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
+  pc_ekf_sanitize_results "$results" "$sanitizer_logs"
+fi
+
+if [ "$fuzz" -eq 1 ]; then
+  fuzz_start=$SECONDS
+  pc_ekf_fuzz_ci "$results" "${PC_EKF_FUZZ_SECONDS:-30}"
+  pc_ekf_log "fuzz step took $((SECONDS - fuzz_start)) s (results: fuzz.xml; logs: .build/fuzz/logs)"
 fi
 
 if [ "$check_colcon" -eq 1 ]; then

@@ -1,9 +1,12 @@
 #include "io/bag_io.h"
 
 #include <ros/message_traits.h>
+#include <ros/serialization.h>
 #include <rosbag/bag.h>
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
+
+#include <boost/make_shared.hpp>
 
 #include <algorithm>
 #include <cmath>
@@ -12,6 +15,8 @@
 #include <iomanip>
 #include <set>
 #include <sstream>
+
+#include "io/bag_check.h"
 
 namespace pc_ekf {
 
@@ -71,9 +76,23 @@ std::vector<typename T::ConstPtr> readTopic(const std::string& path, rosbag::Bag
   std::vector<typename T::ConstPtr> out;
   if (topic.empty()) return out;
   rosbag::View view(bag, rosbag::TopicQuery(topic));
+  std::vector<std::uint8_t> bytes;
   for (const rosbag::MessageInstance& m : view) {
-    typename T::ConstPtr msg = m.instantiate<T>();
-    if (!msg) throw BagError(path + ": cannot decode a message on '" + topic + "'");
+    // roscpp resizes a vector to the length stored in the message before it
+    // checks the bytes are there: check the lengths first (bag_check.h).
+    bytes.resize(m.size());
+    ros::serialization::OStream raw(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+    m.write(raw);
+    const std::string problem =
+        serializedMessageProblem(ros::message_traits::Definition<T>::value(),
+                                 ros::message_traits::DataType<T>::value(), bytes.data(), bytes.size());
+    if (!problem.empty()) {
+      throw BagError(path + ": message " + std::to_string(out.size() + 1) + " on '" + topic +
+                     "' cannot be decoded: " + problem);
+    }
+    const auto msg = boost::make_shared<T>();
+    ros::serialization::IStream in(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
+    ros::serialization::deserialize(in, *msg);
     out.push_back(msg);
   }
   return out;
@@ -139,6 +158,9 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   if (!std::filesystem::is_regular_file(path, ec)) {
     throw BagError(path + ": no such bag file");
   }
+  // rosbag trusts the lengths and offsets in the file (bag_check.h).
+  const std::string problem = bagStructureProblem(path);
+  if (!problem.empty()) throw BagError(path + ": corrupt, truncated or unsupported bag: " + problem);
   rosbag::Bag bag;
   try {
     bag.open(path, rosbag::bagmode::Read);
