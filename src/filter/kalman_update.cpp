@@ -1,6 +1,8 @@
 #include "filter/kalman_update.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace pc_ekf {
@@ -26,6 +28,19 @@ UpdateDiagnostics prepare(const Eigen::MatrixXd& x, const Eigen::MatrixXd& zc,
   d.innovation = z - zc.col(0);
   d.finite = x.allFinite() && zc.allFinite() && z.allFinite() && r.allFinite() &&
              (r.array() > 0.0).all();
+  if (!d.finite) return d;
+  // A channel whose predicted variance (spread + noise) is below round-off of
+  // its magnitude makes P_zz + R numerically singular: the gain would turn
+  // round-off in Z into arbitrary corrections. Refuse the update instead.
+  const double eps = std::numeric_limits<double>::epsilon();
+  for (Eigen::Index c = 0; c < zc.rows(); ++c) {
+    const double variance = zc.row(c).tail(zc.cols() - 1).squaredNorm() + r[c];
+    const double scale = std::max(std::abs(zc(c, 0)), std::abs(z[c]));
+    if (variance <= eps * scale * scale) {
+      d.singular = true;
+      d.finite = false;
+    }
+  }
   return d;
 }
 

@@ -24,6 +24,10 @@ struct UpdateDiagnostics {
   double nis = 0.0;            // innovation^T (P_zz + R)^-1 innovation
   int channels = 0;
   bool finite = true;          // false when the inputs or the result are not finite
+  // P_zz + R numerically singular (a channel's predicted std below sqrt(eps)
+  // of its magnitude, e.g. zero noise on a channel the parameters do not
+  // move): the update is refused, X untouched, finite = false.
+  bool singular = false;
 };
 
 // Updates X in place given the data z (k), noise variances r (k, > 0) and the

@@ -328,6 +328,13 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
 
   YamlMapReader integ = root.map("integration");
   integ.number("max_step", c.integration.max_step, 0.0, 1.0, true);
+  std::string method = toString(c.integration.method);
+  integ.text("method", method);
+  try {
+    c.integration.method = integrationMethodFromString(method);
+  } catch (const std::invalid_argument&) {
+    integ.fail("method", "'" + method + "'", "rk4 or dp5");
+  }
   integ.finish();
 
   readFilterSections(root, c);

@@ -285,6 +285,13 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
   }
   setCoefficients(msg, result.coefficients);
   setHealth(msg, result.health, result.update.channels, health_settings);
+  const int unusable = result.forecast.invalid_points + result.forecast.nonfinite_points;
+  if (unusable > 0) {  // SPEC §3.2: reported, not fatal while enough points remain
+    msg.warnings.push_back("forecast: " + std::to_string(unusable) + " of " +
+                           std::to_string(result.forecast.points) +
+                           " collocation points unusable, left out of the projection (" +
+                           result.forecast.first_problem + ")");
+  }
   return msg;
 }
 

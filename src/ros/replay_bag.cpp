@@ -6,11 +6,16 @@
 #include <filesystem>
 #include <sstream>
 
+#include "io/bag_check.h"
+
 namespace pc_ekf {
 
 ReplayBag::ReplayBag(const std::string& path) : path_(path), bag_(new rosbag::Bag) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw BagError(path + ": no such bag file");
+  // rosbag trusts the lengths and offsets in the file (bag_check.h).
+  const std::string problem = bagStructureProblem(path);
+  if (!problem.empty()) throw BagError(path + ": corrupt, truncated or unsupported bag: " + problem);
   try {
     bag_->open(path, rosbag::bagmode::Read);
   } catch (const std::exception& e) {

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <deque>
 #include <fstream>
+#include <iterator>
 #include <memory>
 
 #include "replay_test_support.h"
@@ -204,13 +205,21 @@ TEST_F(ReplayPlayback, BadBagOrParameterIsFatalAndNamed) {
   const std::string missing = scratch_->file("missing.bag");
   const std::string garbage = scratch_->file("garbage.bag");
   std::ofstream(garbage) << "not a bag\n";
+  // The first half of a good bag (a recording cut off mid-write).
+  const std::string truncated = scratch_->file("truncated.bag");
+  {
+    std::ifstream in(bag_, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    std::ofstream(truncated, std::ios::binary) << bytes.substr(0, bytes.size() / 2);
+  }
   struct Case {
     std::vector<std::string> args;
     std::string expected_in_stderr;
   };
   const std::vector<Case> cases = {
       {{"_bag:=" + missing}, missing + ": no such bag file"},
-      {{"_bag:=" + garbage}, garbage + ": cannot open as a ROS bag"},
+      {{"_bag:=" + garbage}, garbage + ": corrupt, truncated or unsupported bag"},
+      {{"_bag:=" + truncated}, truncated + ": corrupt, truncated or unsupported bag"},
       {{"_bag:=" + bag_, "_rate:=-1.0"}, "rate': value -1"},
       {{}, "bag' is required"},
   };
