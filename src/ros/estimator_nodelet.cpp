@@ -18,6 +18,9 @@ class EstimatorNodelet : public nodelet::Nodelet {
     } catch (const ConfigError& e) {
       NODELET_FATAL("invalid configuration: %s", e.what());
       throw;  // the manager reports the failed load
+    } catch (const CheckpointError& e) {
+      NODELET_FATAL("cannot resume: %s", e.what());
+      throw;
     }
   }
 

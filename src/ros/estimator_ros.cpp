@@ -3,9 +3,11 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
 
 #include "io/estimation_setup.h"
+#include "ros/estimator_checkpoint.h"
 #include "ros/ros_config.h"
 
 namespace pc_ekf {
@@ -54,11 +56,23 @@ const char* toString(RoadMode m) {
   return "?";
 }
 
+// ~checkpoint_file, ~checkpoint_every: node-only private parameters.
+void readCheckpointParams(const ros::NodeHandle& pnh, std::string& file, int& every) {
+  if (pnh.hasParam(kCheckpointFileParam) && !pnh.getParam(kCheckpointFileParam, file)) {
+    throw ConfigError(pnh.resolveName(kCheckpointFileParam) + ": expected a file name (string)");
+  }
+  if (pnh.hasParam(kCheckpointEveryParam) &&
+      (!pnh.getParam(kCheckpointEveryParam, every) || every < 1)) {
+    throw ConfigError(pnh.resolveName(kCheckpointEveryParam) +
+                      ": expected an integer >= 1 (samples between checkpoints)");
+  }
+}
+
 }  // namespace
 
 EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
     : name_(name),
-      config_(loadRosConfig(pnh)),
+      config_(loadRosConfig(pnh, &config_hash_)),
       nh_(nh),
       pnh_(pnh),
       timeline_(timelineSettings(config_)),
@@ -78,6 +92,9 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
         prior_propagator_->basis(), prior_propagator_->parameterCount(), config_.pdf.draws,
         config_.pdf.bins, config_.pdf.seed);
   }
+  readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
+  // Before any subscription: no callback may see the prior state.
+  if (!checkpoint_file_.empty()) resumeFromCheckpoint();
 
   const int queue = config_.node.queue_size;
   estimate_pub_ = nh_.advertise<ParameterEstimate>("parameter_estimate", queue);
@@ -101,10 +118,68 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
            config_.source.c_str());
 }
 
+EstimatorRos::~EstimatorRos() {
+  if (checkpoint_file_.empty() || !run_) return;
+  try {
+    saveCheckpoint();
+    ROS_INFO("%s: checkpoint %s written at sample %d (shutdown)", name_.c_str(),
+             checkpoint_file_.c_str(), run_->samples());
+  } catch (const std::exception& e) {
+    ROS_ERROR("%s: %s", name_.c_str(), e.what());
+  }
+}
+
 void EstimatorRos::startRun() {
   timeline_.reset();
   run_.reset();
+  // A restart must not resume the run that was just abandoned.
+  if (!checkpoint_file_.empty()) std::remove(checkpoint_file_.c_str());
   updateRunState();
+}
+
+std::shared_ptr<const PcPropagator> EstimatorRos::runPropagator() const {
+  if (timeline_.mode() == RoadMode::kTopic) {
+    return makePropagator(config_, makeModel(config_, timeline_.road()));
+  }
+  return analytic_propagator_;
+}
+
+void EstimatorRos::resumeFromCheckpoint() {
+  std::error_code error;
+  if (!std::filesystem::exists(checkpoint_file_, error)) {
+    ROS_INFO("%s: no checkpoint %s yet: starting from the prior", name_.c_str(),
+             checkpoint_file_.c_str());
+    return;
+  }
+  const Checkpoint c = readCheckpoint(checkpoint_file_);
+  requireConfigHash(c, config_hash_, checkpoint_file_);
+  const RoadMode mode = c.road_mode == "topic" ? RoadMode::kTopic : RoadMode::kAnalytic;
+  if (mode == RoadMode::kAnalytic && !analytic_propagator_) {
+    throw CheckpointError("checkpoint " + checkpoint_file_ +
+                          ": road_mode analytic, but the config's road.source is topic");
+  }
+  timeline_.resume(mode, rosTime(c.origin), rosTime(c.last_sample));
+  run_ = std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_);
+  run_->resumeFrom(c, checkpoint_file_);
+  diagnostics_.counters() = countersFromMap(c.counters, checkpoint_file_);
+  timeline_.keepRoadFrom(run_->oldestTime());
+  last_processed_stamp_ = rosTime(c.last_sample);
+  ROS_INFO(
+      "%s: resumed from %s at sample %d, t = %.9f s (%s road, origin %u.%09u, %zu batch "
+      "samples; NIS windows restart)",
+      name_.c_str(), checkpoint_file_.c_str(), run_->samples(), run_->time(), c.road_mode.c_str(),
+      c.origin.sec, c.origin.nsec, run_->batchSamples());
+}
+
+void EstimatorRos::saveCheckpoint() {
+  Checkpoint c;
+  c.config_hash = config_hash_;
+  c.road_mode = timeline_.mode() == RoadMode::kTopic ? "topic" : "analytic";
+  c.origin = checkpointStamp(timeline_.origin().value_or(ros::Time()));
+  c.last_sample = checkpointStamp(last_processed_stamp_);
+  run_->saveTo(c);
+  c.counters = counterMap(diagnostics_.counters());
+  writeCheckpoint(c, checkpoint_file_);
 }
 
 void EstimatorRos::rejectSample(const std::string& reason, const std::string& detail) {
@@ -210,13 +285,7 @@ void EstimatorRos::processReleased() {
 
 void EstimatorRos::process(const ReleasedSample& sample) {
   EstimatorCounters& counters = diagnostics_.counters();
-  if (!run_) {
-    std::shared_ptr<const PcPropagator> propagator = analytic_propagator_;
-    if (timeline_.mode() == RoadMode::kTopic) {
-      propagator = makePropagator(config_, makeModel(config_, timeline_.road()));
-    }
-    run_ = std::make_unique<EstimatorRun>(config_, propagator, pdfs_);
-  }
+  if (!run_) run_ = std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_);
   if (sample.road_held) {
     ++counters.road_wait_expired;
     ROS_WARN_THROTTLE(kWarnPeriod,
@@ -240,6 +309,14 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   ++counters.samples_processed;
   counters.non_finite_updates += e.non_finite + e.coherence_non_finite;
   counters.batch_not_kept += e.batch_full;
+  last_processed_stamp_ = sample.stamp;
+  if (!checkpoint_file_.empty() && run_->samples() % checkpoint_every_ == 0) {
+    try {
+      saveCheckpoint();
+    } catch (const CheckpointError& err) {  // estimating goes on; only a restart would lose
+      ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s", name_.c_str(), err.what());
+    }
+  }
   if (e.non_finite) {
     ROS_ERROR_THROTTLE(kWarnPeriod, "%s: non-finite filter update at t = %.6f s (sample %u)",
                        name_.c_str(), sample.measurement.time, e.estimate.sample_index);

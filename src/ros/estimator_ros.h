@@ -11,6 +11,7 @@
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Trigger.h>
 
+#include <cstdint>
 #include <memory>
 #include <string>
 
@@ -27,7 +28,11 @@ class EstimatorRos {
  public:
   // Reads the configuration (ros_config.h) and starts. Throws ConfigError
   // naming the key and value when the configuration is invalid.
+  // With ~checkpoint_file set and the file present, resumes from it; throws
+  // CheckpointError when it is unreadable or from another configuration.
   EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name);
+  // Writes the checkpoint (when enabled) so that a restart continues the run.
+  ~EstimatorRos();
 
  private:
   void onJointState(const sensor_msgs::JointState::ConstPtr& msg);
@@ -43,8 +48,13 @@ class EstimatorRos {
   void startRun();
   void rejectSample(const std::string& reason, const std::string& detail);
   void updateRunState();
+  // The filters' propagator for the current road mode (topic: the timeline's road).
+  std::shared_ptr<const PcPropagator> runPropagator() const;
+  void resumeFromCheckpoint();
+  void saveCheckpoint();  // throws CheckpointError
 
   std::string name_;
+  std::uint64_t config_hash_ = 0;  // set while config_ is loaded (declared before it)
   EstimatorConfig config_;
   SuspensionJoints joints_;
   ros::NodeHandle nh_, pnh_;
@@ -54,6 +64,9 @@ class EstimatorRos {
   EstimatorTimeline timeline_;
   std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
   EstimatorDiagnostics diagnostics_;
+  std::string checkpoint_file_;  // "" = no checkpoints
+  int checkpoint_every_ = 100;   // samples of the run between writes
+  ros::Time last_processed_stamp_;
 
   ros::Subscriber joint_state_sub_, road_sub_;
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;

@@ -69,6 +69,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   const Eigen::MatrixXd before = full_.state();
   const double time_before = full_.time();
   StepResult r = full_.process(m);
+  const bool singular = r.update.singular;
   if (!finiteResult(r)) {
     // Keep the filter usable: the sample is skipped, its index still counted.
     full_.restore(before, time_before, r.index);
@@ -97,7 +98,10 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   if (out.non_finite) {
     out.estimate.healthy = false;
     out.estimate.warnings.push_back(
-        "update produced non-finite values: sample not used, parameters are those before it");
+        singular ? "innovation covariance numerically singular (a channel's predicted spread "
+                   "and noise below round-off): sample not used, parameters are those before it"
+                 : "update produced non-finite values: sample not used, parameters are those "
+                   "before it");
     zeroNonFinite(out.estimate);
   }
 
@@ -117,6 +121,41 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
     out.pdf = pdfMessage(propagator_->mapping().names(), histograms, {}, r.index, stamp);
   }
   return out;
+}
+
+void EstimatorRun::saveTo(Checkpoint& c) const {
+  c.full = {full_.state(), full_.time(), full_.samples()};
+  c.decimated = {decimated_.state(), decimated_.time(), decimated_.samples()};
+  c.coherence_disagreement = disagreement_;
+  c.batch_samples = batch_series_;
+  c.batch_last_stamp = {batch_last_stamp_.sec, batch_last_stamp_.nsec};
+}
+
+void EstimatorRun::resumeFrom(const Checkpoint& c, const std::string& path) {
+  const auto fits = [&](const FilterCheckpoint& f, const char* name) {
+    const Eigen::MatrixXd& x = full_.state();
+    if (f.x.rows() != x.rows() || f.x.cols() != x.cols()) {
+      throw CheckpointError("checkpoint " + path + ": " + name + ".x is " +
+                            std::to_string(f.x.rows()) + " x " + std::to_string(f.x.cols()) +
+                            ", this configuration's filter is " + std::to_string(x.rows()) + " x " +
+                            std::to_string(x.cols()));
+    }
+  };
+  fits(c.full, "full");
+  fits(c.decimated, "decimated");
+  const int channels = static_cast<int>(propagator_->model().channelNames().size());
+  for (std::size_t i = 0; i < c.batch_samples.size(); ++i) {
+    const std::string problem = measurementProblem(c.batch_samples[i], channels);
+    if (!problem.empty()) {
+      throw CheckpointError("checkpoint " + path + ": key 'batch." + std::to_string(i) +
+                            "': " + problem);
+    }
+  }
+  full_.restore(c.full.x, c.full.time, c.full.samples);
+  decimated_.restore(c.decimated.x, c.decimated.time, c.decimated.samples);
+  disagreement_ = c.coherence_disagreement;
+  batch_series_ = c.batch_samples;
+  batch_last_stamp_ = ros::Time(c.batch_last_stamp.sec, c.batch_last_stamp.nsec);
 }
 
 ParameterEstimate EstimatorRun::priorEstimate(const ros::Time& stamp) const {

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "filter/one_step_filter.h"
+#include "io/checkpoint.h"
 #include "io/estimator_config.h"
 #include "ros/estimator_pdf.h"
 
@@ -55,6 +56,14 @@ class EstimatorRun {
   // by the one-step filters).
   double oldestTime() const;
   std::size_t batchSamples() const { return batch_series_.size(); }
+
+  // The run's state into a checkpoint: both filters, the last coherence
+  // comparison and the kept batch samples (the node adds origin and counters).
+  void saveTo(Checkpoint& c) const;
+  // Continues a checkpointed run of the same configuration (the health
+  // monitors' NIS windows restart). Throws CheckpointError naming `path`
+  // when the state does not fit this run's filters.
+  void resumeFrom(const Checkpoint& c, const std::string& path);
 
  private:
   ParameterEstimate message(const StepResult& r, const ros::Time& stamp) const;

@@ -45,6 +45,15 @@ void EstimatorTimeline::reset() {
   pending_.clear();
 }
 
+void EstimatorTimeline::resume(RoadMode mode, const ros::Time& origin,
+                               const ros::Time& last_sample) {
+  reset();
+  mode_ = mode;
+  origin_ = origin;
+  last_sample_ = last_sample;
+  road_history_complete_ = mode != RoadMode::kTopic;
+}
+
 StampVerdict EstimatorTimeline::order(const std::optional<ros::Time>& last,
                                       const ros::Time& stamp) const {
   if (!last || stamp > *last) return StampVerdict::kAccepted;
@@ -116,7 +125,7 @@ std::vector<ReleasedSample> EstimatorTimeline::release(double now, DroppedSample
         pending_.pop_front();
         continue;
       }
-      const bool covered = road_->lastTime() >= t;
+      const bool covered = !road_->empty() && road_->lastTime() >= t;  // empty: resumed
       if (!covered && !expired) break;
       held = !covered;
     }

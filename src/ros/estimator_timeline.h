@@ -65,6 +65,11 @@ class EstimatorTimeline {
 
   // Forget everything: origin re-armed, road and pending samples cleared.
   void reset();
+  // Continue a checkpointed run: its road mode and origin (so stamps map to
+  // the same t), samples up to `last_sample` refused as already seen. The
+  // road buffer is not checkpointed: in topic mode it starts empty and the
+  // road history counts as incomplete (no ~estimate_batch).
+  void resume(RoadMode mode, const ros::Time& origin, const ros::Time& last_sample);
 
   // `arrival`: wall-clock seconds, for the road wait of pending samples.
   StampVerdict addRoad(const ros::Time& stamp, double left, double right, double arrival);

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "io/checkpoint.h"
+
 namespace pc_ekf {
 namespace {
 
@@ -76,7 +78,7 @@ void mergeYaml(YAML::Node& base, const YAML::Node& overlay) {
   }
 }
 
-EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh) {
+EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* config_hash) {
   const std::string ns = private_nh.getNamespace();
   std::string file;
   private_nh.getParam(kConfigFileParam, file);
@@ -85,7 +87,10 @@ EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh) {
   XmlRpc::XmlRpcValue all;
   if (ros::param::get(ns, all) && all.getType() == XmlRpc::XmlRpcValue::TypeStruct) {
     for (auto it = all.begin(); it != all.end(); ++it) {
-      if (it->first == kConfigFileParam || it->first == kDiagnosticPeriodParam) continue;
+      if (it->first == kConfigFileParam || it->first == kDiagnosticPeriodParam ||
+          it->first == kCheckpointFileParam || it->first == kCheckpointEveryParam) {
+        continue;
+      }
       params[it->first] = yamlFromXmlRpc(it->second);
     }
   }
@@ -103,7 +108,9 @@ EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh) {
     source = source.empty() ? "rosparam " + ns : source + " + rosparam " + ns;
   }
   if (source.empty()) source = "defaults (no ~config_file, no private parameters)";
-  return parseConfig(root, source);
+  EstimatorConfig config = parseConfig(root, source);
+  if (config_hash) *config_hash = fnv1a64(canonicalConfigText(root));
+  return config;
 }
 
 }  // namespace pc_ekf

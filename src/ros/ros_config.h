@@ -9,16 +9,20 @@
 #include <xmlrpcpp/XmlRpcValue.h>
 #include <yaml-cpp/yaml.h>
 
+#include <cstdint>
 #include <string>
 
 #include "io/estimator_config.h"
 
 namespace pc_ekf {
 
-// Private parameters that are not schema keys: the file name itself and
-// diagnostic_updater's own period.
+// Private parameters that are not schema keys: the file name itself,
+// diagnostic_updater's own period and the checkpoint settings (README
+// "Checkpoints"; node only, so the CLIs' schema is unaffected).
 constexpr const char* kConfigFileParam = "config_file";
 constexpr const char* kDiagnosticPeriodParam = "diagnostic_period";
+constexpr const char* kCheckpointFileParam = "checkpoint_file";
+constexpr const char* kCheckpointEveryParam = "checkpoint_every";
 
 // Parameter-server value -> YAML (doubles written so they read back exactly).
 YAML::Node yamlFromXmlRpc(const XmlRpc::XmlRpcValue& value);
@@ -27,6 +31,9 @@ void mergeYaml(YAML::Node& base, const YAML::Node& overlay);
 
 // Reads and validates the configuration of the node whose private
 // NodeHandle is `private_nh`. Throws ConfigError naming the key and value.
-EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh);
+// `config_hash` (optional): FNV-1a of canonicalConfigText() of the merged
+// YAML (file + private parameters), for checkpoints.
+EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh,
+                              std::uint64_t* config_hash = nullptr);
 
 }  // namespace pc_ekf

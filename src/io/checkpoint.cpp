@@ -1,0 +1,396 @@
+#include "io/checkpoint.h"
+
+#include <fcntl.h>
+#include <unistd.h>
+#include <yaml-cpp/yaml.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+namespace pc_ekf {
+namespace {
+
+constexpr const char* kFormat = "pc_ekf_checkpoint 1";
+constexpr const char* kEnd = "end";
+constexpr const char* kCounterPrefix = "counter.";
+
+// ---- writing ----
+
+std::string number(double v) {
+  char text[40];
+  std::snprintf(text, sizeof(text), "%.17g", v);  // round-trips every double
+  return text;
+}
+
+std::string stampText(const CheckpointStamp& s) {
+  return std::to_string(s.sec) + " " + std::to_string(s.nsec);
+}
+
+std::string matrixText(const Eigen::MatrixXd& m) {
+  std::string s = std::to_string(m.rows()) + " " + std::to_string(m.cols());
+  for (Eigen::Index r = 0; r < m.rows(); ++r) {
+    for (Eigen::Index c = 0; c < m.cols(); ++c) s += " " + number(m(r, c));
+  }
+  return s;
+}
+
+std::string measurementText(const Measurement& m) {
+  std::string s = number(m.time) + " " + std::to_string(m.channels.size());
+  for (int c : m.channels) s += " " + std::to_string(c);
+  for (Eigen::Index i = 0; i < m.values.size(); ++i) s += " " + number(m.values(i));
+  return s;
+}
+
+void writeFilter(std::ostream& out, const std::string& name, const FilterCheckpoint& f) {
+  out << name << ".time = " << number(f.time) << "\n";
+  out << name << ".samples = " << f.samples << "\n";
+  out << name << ".x = " << matrixText(f.x) << "\n";
+}
+
+// ---- reading ----
+
+// The file's "key = value" lines; each key is taken once by a reader below.
+class CheckpointText {
+ public:
+  explicit CheckpointText(const std::string& path) : path_(path) {
+    std::ifstream in(path);
+    if (!in) fail("cannot open the checkpoint file (" + std::string(std::strerror(errno)) + ")");
+    std::vector<std::string> lines;
+    for (std::string line; std::getline(in, line);) lines.push_back(line);
+    // Checked first: a cut-off file would otherwise fail on its last, partial line.
+    const auto end_line = std::find_if(lines.begin(), lines.end(), [](const std::string& l) {
+      return l.rfind(std::string(kEnd) + " = ", 0) == 0;
+    });
+    if (end_line == lines.end()) fail("no 'end' line: the file is truncated or not a checkpoint");
+    end_value_ = end_line->substr(std::strlen(kEnd) + 3);
+    if (std::any_of(end_line + 1, lines.end(), [](const std::string& l) { return !l.empty(); })) {
+      fail("text after the 'end' line");
+    }
+    for (auto it = lines.begin(); it != end_line; ++it) {
+      const std::string& line = *it;
+      const std::string where = "line " + std::to_string(it - lines.begin() + 1);
+      if (line.empty() || line[0] == '#') continue;
+      const std::size_t eq = line.find(" = ");
+      if (eq == std::string::npos) {
+        fail(where + ": expected 'key = value', got '" + line.substr(0, 60) + "'");
+      }
+      const std::string key = line.substr(0, eq);
+      if (!values_.emplace(key, line.substr(eq + 3)).second) {
+        fail(where + ": key '" + key + "' appears twice");
+      }
+    }
+  }
+
+  [[noreturn]] void fail(const std::string& what) const {
+    throw CheckpointError("checkpoint " + path_ + ": " + what);
+  }
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
+    fail("key '" + key + "': " + what);
+  }
+
+  // The value's whitespace-separated tokens; the key is consumed.
+  std::vector<std::string> tokens(const std::string& key) {
+    const auto it = values_.find(key);
+    if (it == values_.end()) fail(key, "missing");
+    std::istringstream in(it->second);
+    values_.erase(it);
+    std::vector<std::string> out;
+    for (std::string t; in >> t;) out.push_back(t);
+    if (out.empty()) fail(key, "empty value");
+    return out;
+  }
+  std::string text(const std::string& key) {
+    const auto t = tokens(key);
+    if (t.size() != 1) fail(key, "expected one word, got " + std::to_string(t.size()));
+    return t[0];
+  }
+
+  double real(const std::string& key, const std::string& token) const {
+    char* end = nullptr;
+    errno = 0;
+    const double v = std::strtod(token.c_str(), &end);
+    if (end == token.c_str() || *end != '\0' || !std::isfinite(v)) {
+      fail(key, "'" + token + "' is not a finite number");
+    }
+    return v;
+  }
+  std::uint64_t whole(const std::string& key, const std::string& token, std::uint64_t max) const {
+    char* end = nullptr;
+    errno = 0;
+    const unsigned long long v = std::strtoull(token.c_str(), &end, 10);
+    if (token.empty() || token[0] == '-' || end == token.c_str() || *end != '\0' ||
+        errno == ERANGE || v > max) {
+      fail(key, "'" + token + "' is not an integer in [0, " + std::to_string(max) + "]");
+    }
+    return v;
+  }
+  void count(const std::string& key, const std::vector<std::string>& t, std::size_t n) const {
+    if (t.size() != n) {
+      fail(key, "expected " + std::to_string(n) + " values, got " + std::to_string(t.size()));
+    }
+  }
+
+  double real(const std::string& key) {
+    const auto t = tokens(key);
+    count(key, t, 1);
+    return real(key, t[0]);
+  }
+  int integer(const std::string& key) {
+    const auto t = tokens(key);
+    count(key, t, 1);
+    return static_cast<int>(whole(key, t[0], std::numeric_limits<int>::max()));
+  }
+  CheckpointStamp stamp(const std::string& key) {
+    const auto t = tokens(key);
+    count(key, t, 2);
+    return {static_cast<std::uint32_t>(whole(key, t[0], 0xffffffffu)),
+            static_cast<std::uint32_t>(whole(key, t[1], 999999999u))};
+  }
+  Eigen::MatrixXd matrix(const std::string& key) {
+    const auto t = tokens(key);
+    if (t.size() < 2) fail(key, "expected 'rows cols' and the values, row-major");
+    const auto rows = static_cast<Eigen::Index>(whole(key, t[0], 100000));
+    const auto cols = static_cast<Eigen::Index>(whole(key, t[1], 100000));
+    if (rows == 0 || cols == 0) fail(key, "empty matrix");
+    count(key, t, 2 + static_cast<std::size_t>(rows * cols));
+    Eigen::MatrixXd m(rows, cols);
+    std::size_t i = 2;
+    for (Eigen::Index r = 0; r < rows; ++r) {
+      for (Eigen::Index c = 0; c < cols; ++c) m(r, c) = real(key, t[i++]);
+    }
+    return m;
+  }
+  Measurement measurement(const std::string& key) {
+    const auto t = tokens(key);
+    if (t.size() < 2) fail(key, "expected 'time channels ...'");
+    Measurement m;
+    m.time = real(key, t[0]);
+    const auto n = static_cast<std::size_t>(whole(key, t[1], 1000));
+    count(key, t, 2 + 2 * n);
+    m.values.resize(static_cast<Eigen::Index>(n));
+    for (std::size_t i = 0; i < n; ++i) {
+      m.channels.push_back(static_cast<int>(whole(key, t[2 + i], 1000)));
+      m.values(static_cast<Eigen::Index>(i)) = real(key, t[2 + n + i]);
+    }
+    return m;
+  }
+  FilterCheckpoint filter(const std::string& name) {
+    FilterCheckpoint f;
+    f.time = real(name + ".time");
+    f.samples = integer(name + ".samples");
+    f.x = matrix(name + ".x");
+    return f;
+  }
+
+  // Counters, then nothing may be left.
+  std::map<std::string, std::uint64_t> counters() {
+    std::map<std::string, std::uint64_t> out;
+    for (auto it = values_.begin(); it != values_.end();) {
+      const std::string key = it->first;
+      if (key.rfind(kCounterPrefix, 0) != 0) fail(key, "unknown key");
+      const auto t = tokens(key);  // erases `it`
+      count(key, t, 1);
+      out[key.substr(std::strlen(kCounterPrefix))] =
+          whole(key, t[0], std::numeric_limits<std::uint64_t>::max());
+      it = values_.lower_bound(key);
+    }
+    return out;
+  }
+
+  const std::string& endValue() const { return end_value_; }
+
+ private:
+  std::string path_;
+  std::string end_value_;  // full.samples, repeated as a completeness check
+  std::map<std::string, std::string> values_;
+};
+
+void flatten(const YAML::Node& n, const std::string& path, std::vector<std::string>& lines) {
+  const std::string at = path.empty() ? "(root)" : path;
+  switch (n.Type()) {
+    case YAML::NodeType::Map:
+      if (n.size() == 0) lines.push_back(at + " = {}");
+      for (const auto& kv : n) {
+        const std::string key = kv.first.as<std::string>();
+        flatten(kv.second, path.empty() ? key : path + "." + key, lines);
+      }
+      break;
+    case YAML::NodeType::Sequence:
+      if (n.size() == 0) lines.push_back(at + " = []");
+      for (std::size_t i = 0; i < n.size(); ++i) {
+        flatten(n[i], path + "[" + std::to_string(i) + "]", lines);
+      }
+      break;
+    case YAML::NodeType::Scalar:
+      lines.push_back(at + " = " + n.Scalar());
+      break;
+    default:
+      lines.push_back(at + " = ~");
+  }
+}
+
+void syncDirectory(const std::string& path) {
+  std::string dir = std::filesystem::path(path).parent_path().string();
+  if (dir.empty()) dir = ".";
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
+  if (fd < 0) return;  // durability of the rename only; the rename itself succeeded
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
+
+std::uint64_t fnv1a64(const std::string& text) {
+  std::uint64_t h = 0xcbf29ce484222325ull;
+  for (unsigned char c : text) {
+    h ^= c;
+    h *= 0x100000001b3ull;
+  }
+  return h;
+}
+
+std::string hashText(std::uint64_t hash) {
+  char text[24];
+  std::snprintf(text, sizeof(text), "0x%016llx", static_cast<unsigned long long>(hash));
+  return text;
+}
+
+std::string canonicalConfigText(const YAML::Node& config) {
+  std::vector<std::string> lines;
+  flatten(config, "", lines);
+  std::sort(lines.begin(), lines.end());
+  std::string out;
+  for (const auto& l : lines) out += l + "\n";
+  return out;
+}
+
+void writeCheckpoint(const Checkpoint& c, const std::string& path) {
+  std::ostringstream out;
+  out << "# estimator_node checkpoint (src/io/checkpoint.h); resumed when config_hash matches\n";
+  out << "format = " << kFormat << "\n";
+  out << "config_hash = " << hashText(c.config_hash) << "\n";
+  out << "road_mode = " << c.road_mode << "\n";
+  out << "origin = " << stampText(c.origin) << "\n";
+  out << "last_sample = " << stampText(c.last_sample) << "\n";
+  writeFilter(out, "full", c.full);
+  writeFilter(out, "decimated", c.decimated);
+  out << "coherence_disagreement = ";
+  if (c.coherence_disagreement) {
+    const Eigen::VectorXd& d = *c.coherence_disagreement;
+    out << d.size();
+    for (Eigen::Index i = 0; i < d.size(); ++i) out << " " << number(d(i));
+    out << "\n";
+  } else {
+    out << "none\n";
+  }
+  out << "batch.samples = " << c.batch_samples.size() << "\n";
+  out << "batch.last_stamp = " << stampText(c.batch_last_stamp) << "\n";
+  for (std::size_t i = 0; i < c.batch_samples.size(); ++i) {
+    out << "batch." << i << " = " << measurementText(c.batch_samples[i]) << "\n";
+  }
+  for (const auto& [name, value] : c.counters) {
+    out << kCounterPrefix << name << " = " << value << "\n";
+  }
+  out << kEnd << " = " << c.full.samples << "\n";
+  const std::string text = out.str();
+
+  const std::string tmp = path + ".tmp";
+  const auto failed = [&](const std::string& what) {
+    const std::string reason = std::strerror(errno);
+    ::unlink(tmp.c_str());
+    throw CheckpointError("checkpoint " + path + ": " + what + " (" + reason + ")");
+  };
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) failed("cannot create " + tmp);
+  std::size_t written = 0;
+  while (written < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) {
+      ::close(fd);
+      failed("cannot write " + tmp);
+    }
+    written += static_cast<std::size_t>(n);
+  }
+  // On disk before the rename: a crash leaves the old checkpoint or the new one.
+  if (::fsync(fd) != 0) {
+    ::close(fd);
+    failed("cannot sync " + tmp);
+  }
+  if (::close(fd) != 0) failed("cannot close " + tmp);
+  if (std::rename(tmp.c_str(), path.c_str()) != 0) failed("cannot rename " + tmp + " to it");
+  syncDirectory(path);
+}
+
+Checkpoint readCheckpoint(const std::string& path) {
+  CheckpointText f(path);
+  Checkpoint c;
+  {
+    const auto t = f.tokens("format");
+    std::string format;
+    for (const auto& w : t) format += (format.empty() ? "" : " ") + w;
+    if (format != kFormat) f.fail("format", "'" + format + "', expected '" + kFormat + "'");
+  }
+  const std::string hash = f.text("config_hash");
+  char* end = nullptr;
+  c.config_hash = std::strtoull(hash.c_str(), &end, 16);
+  if (hash.size() != 18 || hash.rfind("0x", 0) != 0 || *end != '\0') {
+    f.fail("config_hash", "'" + hash + "' is not 0x and 16 hex digits");
+  }
+  c.road_mode = f.text("road_mode");
+  if (c.road_mode != "analytic" && c.road_mode != "topic") {
+    f.fail("road_mode", "'" + c.road_mode + "', expected analytic or topic");
+  }
+  c.origin = f.stamp("origin");
+  c.last_sample = f.stamp("last_sample");
+  c.full = f.filter("full");
+  if (f.endValue() != std::to_string(c.full.samples)) {
+    f.fail("the 'end' line (" + f.endValue() + ") does not repeat full.samples (" +
+           std::to_string(c.full.samples) + "): truncated or edited");
+  }
+  c.decimated = f.filter("decimated");
+  if (c.decimated.x.rows() != c.full.x.rows() || c.decimated.x.cols() != c.full.x.cols()) {
+    f.fail("decimated.x", "size differs from full.x");
+  }
+  {
+    const auto words = f.tokens("coherence_disagreement");
+    if (!(words.size() == 1 && words[0] == "none")) {
+      // 'n' and n values
+      const auto n = static_cast<std::size_t>(f.whole("coherence_disagreement", words[0], 1000));
+      f.count("coherence_disagreement", words, 1 + n);
+      Eigen::VectorXd d(static_cast<Eigen::Index>(n));
+      for (std::size_t i = 0; i < n; ++i) {
+        d(static_cast<Eigen::Index>(i)) = f.real("coherence_disagreement", words[1 + i]);
+      }
+      c.coherence_disagreement = d;
+    }
+  }
+  const int batch = f.integer("batch.samples");
+  c.batch_last_stamp = f.stamp("batch.last_stamp");
+  for (int i = 0; i < batch; ++i) {
+    c.batch_samples.push_back(f.measurement("batch." + std::to_string(i)));
+  }
+  c.counters = f.counters();
+  return c;
+}
+
+void requireConfigHash(const Checkpoint& c, std::uint64_t current, const std::string& path) {
+  if (c.config_hash == current) return;
+  throw CheckpointError("checkpoint " + path + " was written under config hash " +
+                        hashText(c.config_hash) + ", the current config hashes to " +
+                        hashText(current) +
+                        ": the configuration changed, so the saved filter state does not apply "
+                        "(restore that configuration, or delete the checkpoint to start from "
+                        "the prior)");
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,77 @@
+// estimator_node's checkpoint: the filter state of the current run, its
+// time origin and counters, and a hash of the configuration it was computed
+// under, as a small "key = value" text file. Doubles are written with 17
+// significant digits so that a resumed filter continues bit-exactly.
+// Written to `path.tmp`, fsync'ed, then renamed over `path` (atomic on
+// POSIX): a reader sees the previous checkpoint or the new one, never half.
+#pragma once
+
+#include <Eigen/Dense>
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "filter/measurement.h"
+
+namespace YAML {
+class Node;
+}
+
+namespace pc_ekf {
+
+// Unreadable, corrupt or foreign checkpoint: the message names the file and
+// what is wrong.
+class CheckpointError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// A ROS stamp without ROS (seconds and nanoseconds since the epoch).
+struct CheckpointStamp {
+  std::uint32_t sec = 0, nsec = 0;
+};
+
+// One OneStepFilter: coefficient matrix, time since the origin, samples processed.
+struct FilterCheckpoint {
+  Eigen::MatrixXd x;  // (states + parameters) x S
+  double time = 0.0;
+  int samples = 0;
+};
+
+struct Checkpoint {
+  std::uint64_t config_hash = 0;
+  std::string road_mode;        // "analytic" or "topic" (EstimatorTimeline's RoadMode)
+  CheckpointStamp origin;       // stamp of t = 0
+  CheckpointStamp last_sample;  // stamp of the last processed sample
+  FilterCheckpoint full;        // every sample
+  FilterCheckpoint decimated;   // every k-th sample (coherence check)
+  std::optional<Eigen::VectorXd> coherence_disagreement;  // last multi-rate comparison
+  MeasurementSeries batch_samples;                        // kept for ~estimate_batch
+  CheckpointStamp batch_last_stamp;
+  std::map<std::string, std::uint64_t> counters;  // node counters by name ([a-z0-9_.])
+};
+
+// 64-bit FNV-1a: stable across runs, compilers and machines.
+std::uint64_t fnv1a64(const std::string& text);
+
+// The configuration as one "key.path = value" line per leaf, keys sorted:
+// the same text for the same parsed YAML whatever the comments, spacing and
+// key order of the file. Hash it with fnv1a64 for Checkpoint::config_hash.
+std::string canonicalConfigText(const YAML::Node& config);
+
+// Throws CheckpointError when the file cannot be written or renamed.
+void writeCheckpoint(const Checkpoint& c, const std::string& path);
+
+// Strict: every key present once, matrices of the stated size, numbers
+// finite. Throws CheckpointError naming the file and the key.
+Checkpoint readCheckpoint(const std::string& path);
+
+// Throws CheckpointError naming both hashes when `c` was written under
+// another configuration.
+void requireConfigHash(const Checkpoint& c, std::uint64_t current, const std::string& path);
+
+std::string hashText(std::uint64_t hash);  // 0x + 16 hex digits
+
+}  // namespace pc_ekf
