@@ -19,6 +19,8 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <utility>
+#include <iterator>
 
 #include "bag_test_support.h"
 
@@ -47,9 +49,25 @@ void synthesize(const ScratchDir& dir, const std::string& config, const std::str
   EXPECT_EQ(r.out, "");
 }
 
+// speed_bump.yaml with RK4 at 1 ms: the same steps on the analytic road and on
+// the bag's 1 kHz road (whose samples are breakpoints), so the same numbers.
+std::string rk4At1ms(const ScratchDir& dir) {
+  std::ifstream in(test::config("speed_bump.yaml"));
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const auto& [from, to] : {std::pair<std::string, std::string>{"method: dp5", "method: rk4"},
+                                 {"max_step: 0.003", "max_step: 0.001"}}) {
+    const auto at = text.find(from);
+    EXPECT_NE(at, std::string::npos) << from;
+    if (at != std::string::npos) text.replace(at, from.size(), to);
+  }
+  const std::string path = dir.file("speed_bump_rk4.yaml");
+  std::ofstream(path) << text;
+  return path;
+}
+
 TEST(EstimateOfflineBag, SpeedBumpBagMatchesTheCsvRun) {
   ScratchDir dir;
-  const std::string config = test::config("speed_bump.yaml");
+  const std::string config = rk4At1ms(dir);
   const std::string bag = dir.file("bump.bag"), csv = dir.file("bump.csv");
   synthesize(dir, config, bag, "--csv " + quote(csv));
   const auto from_bag = estimate(dir, config, "--bag " + quote(bag));
@@ -61,6 +79,17 @@ TEST(EstimateOfflineBag, SpeedBumpBagMatchesTheCsvRun) {
   }
   // And the estimate is the paper's case A answer, near the truth.
   EXPECT_NEAR(from_bag.at("added_mass").mean, 223.26, 0.5);
+
+  // The default (Dormand-Prince 5 at 3 ms) takes other steps on the bag's road
+  // (every 1 ms): a difference of integration error only, far below the std.
+  const std::string defaults = test::config("speed_bump.yaml");
+  const auto bag_default = estimate(dir, defaults, "--bag " + quote(bag));
+  const auto csv_default = estimate(dir, defaults, "--measurements " + quote(csv));
+  for (const auto& [name, c] : csv_default) {
+    EXPECT_LT(std::abs(bag_default.at(name).mean - c.mean), 1e-3 * c.stddev) << name;
+    EXPECT_NEAR(bag_default.at(name).stddev, c.stddev, 1e-5 * c.stddev) << name;
+    EXPECT_LT(std::abs(c.mean - from_csv.at(name).mean), 1e-3 * c.stddev) << name;
+  }
 }
 
 TEST(EstimateOfflineBag, SineBagDiffersFromTheCsvRunOnlyByRoadInterpolation) {
