@@ -95,6 +95,7 @@ int run(const Options& o) {
 
   const ros::Time origin(1000000, 0);
   long processed = 0, dropped = 0, unhealthy = 0;
+  std::string last_warning;  // of the last unhealthy estimate
   double rss_warm = NAN, rss_max_after = 0.0;
   const double start = seconds();
   std::printf("%10s %10s %10s %10s %10s %8s\n", "samples", "rss_mb", "road_buf", "batch_buf",
@@ -125,6 +126,7 @@ int run(const Options& o) {
       timeline.keepRoadFrom(run->oldestTime());
       ++processed;
       unhealthy += !e.estimate.healthy;
+      if (!e.estimate.healthy && !e.estimate.warnings.empty()) last_warning = e.estimate.warnings.front();
       dropped += e.non_finite;
     }
     dropped += lost.no_road + lost.before_origin;
@@ -141,6 +143,7 @@ int run(const Options& o) {
               "%.1f MB, max after %.1f MB: growth %.1f MB (limit %.0f); %.0f samples/s\n",
               processed, o.samples, dropped, o.warmup, rss_warm, rss_max_after, growth,
               o.limit_mb, static_cast<double>(processed) / (seconds() - start));
+  if (!last_warning.empty()) std::printf("last health warning: %s\n", last_warning.c_str());
   return (dropped == 0 && processed == o.samples && growth < o.limit_mb) ? 0 : 1;
 }
 
