@@ -4,7 +4,7 @@
 # (gtests, tools they run, nodes rostest launches) collected as one test case.
 # Source after common.sh.
 
-PC_EKF_SANITIZE_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer"
+PC_EKF_SANITIZE_FLAGS="-fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer -Wno-maybe-uninitialized"
 
 pc_ekf_sanitize_cmake_args() {
   echo "-DCMAKE_CXX_FLAGS=$PC_EKF_SANITIZE_FLAGS"
