@@ -7,6 +7,7 @@
 #   soak.sh [--samples N (1000000)] [--warmup N (200000)] [--max-road N (100000)]
 #           [--max-batch N (100000)] [--pdf-every K (1000)]
 set -uo pipefail
+case "${1:-}" in -h|--help) sed -n '2,8p' "$0"; exit 0 ;; esac
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
 pc_ekf_ensure_packages || exit 1

@@ -19,17 +19,6 @@ double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
-TimelineSettings timelineSettings(const EstimatorConfig& c) {
-  TimelineSettings s;
-  s.road_topic_required = c.road.source == RoadSource::kTopic;
-  s.analytic_interval = c.sampling.interval();
-  s.time_jump_tolerance = c.node.time_jump_tolerance;
-  s.road_wait_timeout = c.node.road_wait_timeout;
-  s.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);
-  s.max_road = static_cast<std::size_t>(c.node.max_road_samples);
-  return s;
-}
-
 const char* toString(JointStateProblem p) {
   switch (p) {
     case JointStateProblem::kArrayLength:

@@ -4,9 +4,21 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "io/estimator_config.h"
 #include "ros/message_conversion.h"
 
 namespace pc_ekf {
+
+TimelineSettings timelineSettings(const EstimatorConfig& c) {
+  TimelineSettings s;
+  s.road_topic_required = c.road.source == RoadSource::kTopic;
+  s.analytic_interval = c.sampling.interval();
+  s.time_jump_tolerance = c.node.time_jump_tolerance;
+  s.road_wait_timeout = c.node.road_wait_timeout;
+  s.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);
+  s.max_road = static_cast<std::size_t>(c.node.max_road_samples);
+  return s;
+}
 
 const char* toString(StampVerdict v) {
   switch (v) {

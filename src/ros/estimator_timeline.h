@@ -16,6 +16,8 @@
 
 namespace pc_ekf {
 
+struct EstimatorConfig;
+
 // Where the road of the current run comes from: decided by the first message
 // after start or reset.
 enum class RoadMode {
@@ -44,6 +46,9 @@ struct TimelineSettings {
   std::size_t max_pending = 1000;
   std::size_t max_road = 1000000;
 };
+
+// The settings the config's node: and sampling sections give.
+TimelineSettings timelineSettings(const EstimatorConfig& config);
 
 // A sample the filter may process now, its time set (s since the origin).
 struct ReleasedSample {

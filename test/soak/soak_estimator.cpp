@@ -46,6 +46,7 @@ struct Options {
 
 Options parse(int argc, char** argv) {
   Options o;
+  if (argc % 2 == 0) throw std::invalid_argument(std::string("option '") + argv[argc - 1] + "' needs a value");
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string k = argv[i], v = argv[i + 1];
     if (k == "--config") o.config = v;
@@ -81,12 +82,8 @@ int run(const Options& o) {
   std::mt19937_64 rng(c.truth.seed);
   std::normal_distribution<double> normal;
 
-  TimelineSettings ts;
+  TimelineSettings ts = timelineSettings(c);
   ts.analytic_interval = o.dt;
-  ts.time_jump_tolerance = c.node.time_jump_tolerance;
-  ts.road_wait_timeout = c.node.road_wait_timeout;
-  ts.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);
-  ts.max_road = static_cast<std::size_t>(c.node.max_road_samples);
   EstimatorTimeline timeline(ts);
   const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>()));
   const auto pdfs = std::make_shared<ParameterPdfSampler>(
