@@ -19,7 +19,7 @@
 namespace pc_ekf {
 namespace {
 
-constexpr const char* kFormat = "pc_ekf_checkpoint 1";
+constexpr const char* kFormat = "pc_ekf_checkpoint 2";  // 2: road buffer
 constexpr const char* kEnd = "end";
 constexpr const char* kCounterPrefix = "counter.";
 
@@ -297,6 +297,12 @@ void writeCheckpoint(const Checkpoint& c, const std::string& path) {
   for (std::size_t i = 0; i < c.batch_samples.size(); ++i) {
     out << "batch." << i << " = " << measurementText(c.batch_samples[i]) << "\n";
   }
+  out << "road.samples = " << c.road.t.size() << "\n";
+  out << "road.last_stamp = " << stampText(c.road_last_stamp) << "\n";
+  for (std::size_t i = 0; i < c.road.t.size(); ++i) {
+    out << "road." << i << " = " << number(c.road.t[i]) << " " << number(c.road.left[i]) << " "
+        << number(c.road.right[i]) << "\n";
+  }
   for (const auto& [name, value] : c.counters) {
     out << kCounterPrefix << name << " = " << value << "\n";
   }
@@ -379,6 +385,19 @@ Checkpoint readCheckpoint(const std::string& path) {
   for (int i = 0; i < batch; ++i) {
     c.batch_samples.push_back(f.measurement("batch." + std::to_string(i)));
   }
+  const int road = f.integer("road.samples");
+  c.road_last_stamp = f.stamp("road.last_stamp");
+  for (int i = 0; i < road; ++i) {
+    const std::string key = "road." + std::to_string(i);
+    const auto t = f.tokens(key);
+    f.count(key, t, 3);
+    const double time = f.real(key, t[0]);
+    if (i > 0 && !(time > c.road.t.back())) f.fail(key, "time not after the previous road sample");
+    c.road.t.push_back(time);
+    c.road.left.push_back(f.real(key, t[1]));
+    c.road.right.push_back(f.real(key, t[2]));
+  }
+  if (road > 0 && c.road_mode != "topic") f.fail("road.samples", "road samples with road_mode analytic");
   c.counters = f.counters();
   return c;
 }

@@ -14,6 +14,7 @@
 #include <string>
 
 #include "filter/measurement.h"
+#include "io/measurement_csv.h"
 
 namespace YAML {
 class Node;
@@ -50,6 +51,11 @@ struct Checkpoint {
   std::optional<Eigen::VectorXd> coherence_disagreement;  // last multi-rate comparison
   MeasurementSeries batch_samples;                        // kept for ~estimate_batch
   CheckpointStamp batch_last_stamp;
+  // Road from road/profile (road_mode topic) that the filters still need: the
+  // buffer from the sample at or before their oldest time (s since origin);
+  // empty otherwise. road_last_stamp: the last road message accepted.
+  RoadSeries road;
+  CheckpointStamp road_last_stamp;
   std::map<std::string, std::uint64_t> counters;  // node counters by name ([a-z0-9_.])
 };
 

@@ -1,5 +1,7 @@
 #include "io/estimation_setup.h"
 
+#include <cmath>
+
 #include "io/measurement_csv.h"
 
 namespace pc_ekf {
@@ -44,6 +46,17 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
 
 NoiseModel makeNoiseModel(const EstimatorConfig& c) {
   return NoiseModel{c.measurement.r_relative, c.measurement.r_floor};
+}
+
+ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c) {
+  ReferencePosteriorSettings s;
+  s.coarse_points = c.grid.coarse_points;
+  s.fine_points = c.grid.fine_points;
+  s.fine_span_sigmas = c.grid.fine_span_sigmas;
+  s.border_mass_tolerance = c.grid.border_mass_tolerance;
+  s.threads = c.grid.threads;
+  s.bins = c.pdf.bins;
+  return s;
 }
 
 OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
@@ -94,6 +107,22 @@ MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const Mechanica
   s.seed = seed;
   s.integration = c.integration;
   return synthesizeMeasurements(model, truthParameters(c, model), s);
+}
+
+RoadSeries sampleRoad(const RoadInput& road, double t_end, double rate) {
+  const long count = static_cast<long>(std::ceil(t_end * rate - 1e-9)) + 1;
+  RoadSeries r;
+  r.t.reserve(count);
+  r.left.reserve(count);
+  r.right.reserve(count);
+  for (long i = 0; i < count; ++i) {
+    const double t = static_cast<double>(i) / rate;
+    const Eigen::Vector2d y = road.height(t);
+    r.t.push_back(t);
+    r.left.push_back(y(0));
+    r.right.push_back(y(1));
+  }
+  return r;
 }
 
 }  // namespace pc_ekf

@@ -8,8 +8,10 @@
 #include "filter/ensemble_kalman_filter.h"
 #include "filter/one_step_filter.h"
 #include "filter/pc_propagator.h"
+#include "filter/reference_posterior.h"
 #include "filter/synthetic_data.h"
 #include "io/estimator_config.h"
+#include "io/measurement_csv.h"
 #include "model/roll_plane_model.h"
 
 namespace pc_ekf {
@@ -27,11 +29,17 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
 OneStepSettings makeOneStepSettings(const EstimatorConfig& c);
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c);
 NoiseModel makeNoiseModel(const EstimatorConfig& c);
+// The grid: section (and pdf.bins) as settings of the exact posterior.
+ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c);
 std::vector<int> channelIndices(const EstimatorConfig& c);
 
 // Synthetic data of the config (truth xi, sampling, noise) with `seed`.
 MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
                                        std::uint64_t seed);
 Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model);
+
+// `road` sampled at `rate` Hz from t = 0 until the first time >= t_end: the
+// road/profile stream a bag or a live vehicle would carry.
+RoadSeries sampleRoad(const RoadInput& road, double t_end, double rate);
 
 }  // namespace pc_ekf

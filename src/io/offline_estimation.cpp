@@ -166,16 +166,9 @@ void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
 void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
              std::shared_ptr<const RollPlaneModel> model, const ProgressCallback& progress,
              const CoarseGridCache* cache, OfflineResult* r) {
-  ReferencePosteriorSettings s;
-  s.coarse_points = c.grid.coarse_points;
-  s.fine_points = c.grid.fine_points;
-  s.fine_span_sigmas = c.grid.fine_span_sigmas;
-  s.border_mass_tolerance = c.grid.border_mass_tolerance;
-  s.threads = c.grid.threads;
-  s.bins = c.pdf.bins;
-  const ReferencePosterior p =
-      computeReferencePosterior(*model, ParameterMapping(*model, c.uncertain), series,
-                                makeNoiseModel(c), c.integration, s, cache, progress);
+  const ReferencePosterior p = computeReferencePosterior(
+      *model, ParameterMapping(*model, c.uncertain), series, makeNoiseModel(c), c.integration,
+      makeReferenceSettings(c), cache, progress);
   summarise(c, p.mean, p.stddev, r);
   r->records.push_back({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time,
                         p.mean, p.stddev, Eigen::MatrixXd(), 0.0, false, true, true});

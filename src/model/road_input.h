@@ -67,6 +67,9 @@ class SampledRoad : public RoadInput {
   std::size_t size() const { return t_.size(); }
   double firstTime() const;
   double lastTime() const;
+  const std::vector<double>& times() const { return t_; }
+  const std::vector<double>& leftHeights() const { return left_; }
+  const std::vector<double>& rightHeights() const { return right_; }
   Eigen::Vector2d height(double t) const override;
   std::vector<double> breakpoints(double t0, double t1) const override;
  private:

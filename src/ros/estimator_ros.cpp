@@ -147,17 +147,19 @@ void EstimatorRos::resumeFromCheckpoint() {
     throw CheckpointError("checkpoint " + checkpoint_file_ +
                           ": road_mode analytic, but the config's road.source is topic");
   }
-  timeline_.resume(mode, rosTime(c.origin), rosTime(c.last_sample));
+  std::optional<ros::Time> last_road;
+  if (!c.road.t.empty()) last_road = rosTime(c.road_last_stamp);
+  timeline_.resume(mode, rosTime(c.origin), rosTime(c.last_sample), c.road, last_road);
   run_ = std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_);
   run_->resumeFrom(c, checkpoint_file_);
   diagnostics_.counters() = countersFromMap(c.counters, checkpoint_file_);
   timeline_.keepRoadFrom(run_->oldestTime());
   last_processed_stamp_ = rosTime(c.last_sample);
   ROS_INFO(
-      "%s: resumed from %s at sample %d, t = %.9f s (%s road, origin %u.%09u, %zu batch "
-      "samples; NIS windows restart)",
+      "%s: resumed from %s at sample %d, t = %.9f s (%s road, origin %u.%09u, %zu road "
+      "samples, %zu batch samples; NIS windows restart)",
       name_.c_str(), checkpoint_file_.c_str(), run_->samples(), run_->time(), c.road_mode.c_str(),
-      c.origin.sec, c.origin.nsec, run_->batchSamples());
+      c.origin.sec, c.origin.nsec, c.road.t.size(), run_->batchSamples());
 }
 
 void EstimatorRos::saveCheckpoint() {
@@ -167,6 +169,10 @@ void EstimatorRos::saveCheckpoint() {
   c.origin = checkpointStamp(timeline_.origin().value_or(ros::Time()));
   c.last_sample = checkpointStamp(last_processed_stamp_);
   run_->saveTo(c);
+  if (timeline_.mode() == RoadMode::kTopic) {
+    c.road = timeline_.roadFrom(run_->oldestTime());
+    if (const auto last = timeline_.lastRoadStamp()) c.road_last_stamp = checkpointStamp(*last);
+  }
   c.counters = counterMap(diagnostics_.counters());
   writeCheckpoint(c, checkpoint_file_);
 }

@@ -58,12 +58,28 @@ void EstimatorTimeline::reset() {
 }
 
 void EstimatorTimeline::resume(RoadMode mode, const ros::Time& origin,
-                               const ros::Time& last_sample) {
+                               const ros::Time& last_sample, const RoadSeries& road,
+                               const std::optional<ros::Time>& last_road) {
   reset();
   mode_ = mode;
   origin_ = origin;
   last_sample_ = last_sample;
   road_history_complete_ = mode != RoadMode::kTopic;
+  if (mode != RoadMode::kTopic) return;
+  road_ = std::make_shared<SampledRoad>(road.t, road.left, road.right);
+  last_road_ = last_road;
+}
+
+RoadSeries EstimatorTimeline::roadFrom(double t) const {
+  const std::vector<double>& times = road_->times();
+  auto first = std::upper_bound(times.begin(), times.end(), t);
+  if (first != times.begin()) --first;
+  const auto i = first - times.begin();
+  RoadSeries r;
+  r.t.assign(first, times.end());
+  r.left.assign(road_->leftHeights().begin() + i, road_->leftHeights().end());
+  r.right.assign(road_->rightHeights().begin() + i, road_->rightHeights().end());
+  return r;
 }
 
 StampVerdict EstimatorTimeline::order(const std::optional<ros::Time>& last,

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "filter/measurement.h"
+#include "io/measurement_csv.h"
 #include "model/road_input.h"
 
 namespace pc_ekf {
@@ -71,10 +72,12 @@ class EstimatorTimeline {
   // Forget everything: origin re-armed, road and pending samples cleared.
   void reset();
   // Continue a checkpointed run: its road mode and origin (so stamps map to
-  // the same t), samples up to `last_sample` refused as already seen. The
-  // road buffer is not checkpointed: in topic mode it starts empty and the
-  // road history counts as incomplete (no ~estimate_batch).
-  void resume(RoadMode mode, const ros::Time& origin, const ros::Time& last_sample);
+  // the same t), samples up to `last_sample` refused as already seen. In
+  // topic mode the road buffer restarts from `road` (what the filters still
+  // need, roadFrom() when saved) and road messages up to `last_road` count as
+  // already seen; the road history counts as incomplete (no ~estimate_batch).
+  void resume(RoadMode mode, const ros::Time& origin, const ros::Time& last_sample,
+              const RoadSeries& road = {}, const std::optional<ros::Time>& last_road = {});
 
   // `arrival`: wall-clock seconds, for the road wait of pending samples.
   StampVerdict addRoad(const ros::Time& stamp, double left, double right, double arrival);
@@ -100,6 +103,9 @@ class EstimatorTimeline {
   bool roadHistoryComplete() const { return road_history_complete_; }
   std::size_t pendingCount() const { return pending_.size(); }
   std::size_t roadCount() const { return road_->size(); }
+  // The road buffer from the sample at or before t (s since the origin) on.
+  RoadSeries roadFrom(double t) const;
+  std::optional<ros::Time> lastRoadStamp() const { return last_road_; }
 
  private:
   struct Pending {

@@ -82,13 +82,7 @@ int main(int argc, char** argv) {
       return args.badInput("--road-rate " + args["--road-rate"] + " gives " + std::to_string(count) +
                       " road messages over " + std::to_string(t_last) + " s; too many");
     }
-    for (long i = 0; i < count; ++i) {
-      const double t = static_cast<double>(i) / road_rate;
-      const Eigen::Vector2d y = road->height(t);
-      bag.road.t.push_back(t);
-      bag.road.left.push_back(y(0));
-      bag.road.right.push_back(y(1));
-    }
+    bag.road = sampleRoad(*road, t_last, road_rate);
     bag.samples = samples;
 
     const ParameterMapping mapping(*model, config.uncertain);

@@ -72,11 +72,7 @@ double squaredError(const Eigen::VectorXd& mean, const ReferencePosterior& ref) 
 CaseResult runCase(int samples) {
   const Scenario s = makeScenario(paperConfig(samples));
   const ParameterMapping mapping(*s.model, s.config.uncertain);
-  ReferencePosteriorSettings ps;
-  ps.coarse_points = s.config.grid.coarse_points;
-  ps.fine_points = s.config.grid.fine_points;
-  ps.fine_span_sigmas = s.config.grid.fine_span_sigmas;
-  ps.border_mass_tolerance = s.config.grid.border_mass_tolerance;
+  ReferencePosteriorSettings ps = makeReferenceSettings(s.config);
   ps.threads = 2;
   const CoarseGridCache cache(*s.model, mapping, sampleTimes(s.series), s.config.integration,
                               ps.coarse_points, ps.threads);

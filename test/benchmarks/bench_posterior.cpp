@@ -10,11 +10,7 @@ namespace {
 void BM_ReferencePosteriorCaseB(benchmark::State& state) {
   const Scenario s = makeScenario(paperConfig(100));
   const ParameterMapping mapping(*s.model, s.config.uncertain);
-  ReferencePosteriorSettings ps;
-  ps.coarse_points = s.config.grid.coarse_points;
-  ps.fine_points = s.config.grid.fine_points;
-  ps.fine_span_sigmas = s.config.grid.fine_span_sigmas;
-  ps.border_mass_tolerance = s.config.grid.border_mass_tolerance;
+  ReferencePosteriorSettings ps = makeReferenceSettings(s.config);
   ps.threads = static_cast<int>(state.range(0));
   ReferencePosterior p;
   double wall = 0.0, cpu = 0.0;

@@ -84,18 +84,38 @@ class NodeProcess {
 struct NodeTopics {
   NodeTopics(ros::NodeHandle& nh, const std::string& ns)
       : joints(nh.advertise<sensor_msgs::JointState>(ns + "/suspension/joint_states", 1000)),
+        road(nh.advertise<RoadProfile>(ns + "/road/profile", 100000)),
         estimates(nh, ns + "/parameter_estimate") {}
-  bool connected() const { return joints.getNumSubscribers() > 0 && estimates.connected(); }
+  bool connected() const {
+    return joints.getNumSubscribers() > 0 && road.getNumSubscribers() > 0 &&
+           estimates.connected();
+  }
+  // The node's input connections gone (its output link may linger until a
+  // node of the same name registers: the master then replaces it).
+  bool inputDisconnected() const {
+    return joints.getNumSubscribers() == 0 && road.getNumSubscribers() == 0;
+  }
   // Samples [from, to) one at a time, each once the previous estimate is in.
-  void feed(const Record& r, std::size_t from, std::size_t to) {
+  // With `with_road`, the road messages up to each sample's stamp go first,
+  // starting at the stamp of sample `from` - 1: a resumed node has no road
+  // buffer, the interval after its checkpointed sample needs the road from it.
+  void feed(const Record& r, std::size_t from, std::size_t to, bool with_road = false) {
+    const double road_from = from > 0 ? r.samples[from - 1].time : 0.0;
+    std::size_t next_road = static_cast<std::size_t>(
+        std::lower_bound(r.road.t.begin(), r.road.t.end(), road_from - 1e-12) - r.road.t.begin());
     for (std::size_t k = from; k < to; ++k) {
+      for (; with_road && next_road < r.road.t.size() && r.road.t[next_road] <= r.samples[k].time;
+           ++next_road) {
+        road.publish(roadProfileMessage(stampAt(origin, r.road.t[next_road]),
+                                        r.road.left[next_road], r.road.right[next_road]));
+      }
       const std::size_t before = estimates.size();
       joints.publish(jointStateFromMeasurement(r.samples[k], stampAt(origin, r.samples[k].time)));
       ASSERT_TRUE(estimates.waitForCount(before + 1, 20.0)) << "no estimate for sample " << k + 1;
     }
   }
   const ros::Time origin{1000, 0};
-  ros::Publisher joints;
+  ros::Publisher joints, road;
   Collector<ParameterEstimate> estimates;
 };
 
@@ -108,16 +128,24 @@ class EstimatorCheckpoint : public ::testing::Test {
     ASSERT_EQ(record_.samples.size(), kSamples);
   }
   // The same configuration for every node of a test: it is what the hash covers.
-  std::vector<std::string> params(const std::string& checkpoint, int every = kEvery) const {
+  std::vector<std::string> params(const std::string& checkpoint, int every = kEvery,
+                                  bool topic_road = false) const {
     std::vector<std::string> p{"_config_file:=" + configPath("speed_bump.yaml"),
                                "_sampling/samples:=" + std::to_string(kSamples),
                                "_node/publish_pdf:=false"};
+    if (topic_road) p.push_back("_road/source:=topic");
     if (!checkpoint.empty()) {
       p.push_back("_checkpoint_file:=" + checkpoint);
       p.push_back("_checkpoint_every:=" + std::to_string(every));
     }
     return p;
   }
+
+  // A node killed after kKillAfter samples and restarted from its checkpoint
+  // publishes, for the samples after the checkpoint, what a node never
+  // stopped publishes (to 1e-9 relative). Road from the config or, with
+  // `topic_road`, from road/profile (re-sent from the checkpointed sample on).
+  void killAndResume(const std::string& ns, bool topic_road);
 
   ros::NodeHandle nh_;
   EstimatorConfig config_;
@@ -137,27 +165,27 @@ struct Difference {
   }
 };
 
-TEST_F(EstimatorCheckpoint, KilledAndRestartedEqualsUninterruptedRun) {
+void EstimatorCheckpoint::killAndResume(const std::string& ns, bool topic_road) {
   // Reference: one node, the whole record, never stopped.
   std::vector<ParameterEstimate> reference;
   {
-    NodeProcess node("/ckpt_reference", params(""));
-    NodeTopics topics(nh_, "/ckpt_reference");
+    NodeProcess node(ns + "_reference", params("", kEvery, topic_road));
+    NodeTopics topics(nh_, ns + "_reference");
     ASSERT_TRUE(waitUntil([&] { return topics.connected(); }, 20.0)) << node.err();
-    topics.feed(record_, 0, kSamples);
+    topics.feed(record_, 0, kSamples, topic_road);
     reference = topics.estimates.messages();
     node.signal(SIGINT);
     EXPECT_EQ(node.wait(20.0), 0) << node.err();
   }
   ASSERT_EQ(reference.size(), kSamples);
 
-  const std::string file = tempPath("kill.ckpt");
+  const std::string file = tempPath(ns.substr(1) + ".ckpt");
   std::filesystem::remove(file);
-  NodeTopics topics(nh_, "/ckpt_run");
+  NodeTopics topics(nh_, ns);
   {
-    NodeProcess node("/ckpt_run", params(file));
+    NodeProcess node(ns, params(file, kEvery, topic_road));
     ASSERT_TRUE(waitUntil([&] { return topics.connected(); }, 20.0)) << node.err();
-    topics.feed(record_, 0, kKillAfter);
+    topics.feed(record_, 0, kKillAfter, topic_road);
     node.signal(SIGKILL);
     EXPECT_EQ(node.wait(10.0), -SIGKILL);
   }
@@ -170,13 +198,21 @@ TEST_F(EstimatorCheckpoint, KilledAndRestartedEqualsUninterruptedRun) {
   EXPECT_EQ(saved.batch_samples.size(), resume_at);
   EXPECT_EQ(saved.counters.at("samples_processed"), resume_at);
   EXPECT_FALSE(std::filesystem::exists(file + ".tmp"));
+  if (topic_road) {  // the road both filters still need: from the decimated one's t = 0.9 s
+    ASSERT_FALSE(saved.road.t.empty());
+    EXPECT_LE(saved.road.t.front(), saved.decimated.time);
+    EXPECT_GT(saved.road.t.front(), saved.decimated.time - 0.0015);
+    EXPECT_GE(saved.road.t.back(), saved.full.time);
+  } else {
+    EXPECT_TRUE(saved.road.t.empty());
+  }
 
   // The dead node's connections must be gone before the new one's count.
-  ASSERT_TRUE(waitUntil([&] { return !topics.connected(); }, 20.0));
+  ASSERT_TRUE(waitUntil([&] { return topics.inputDisconnected(); }, 20.0));
   topics.estimates.clear();
-  NodeProcess node("/ckpt_run", params(file));
+  NodeProcess node(ns, params(file, kEvery, topic_road));
   ASSERT_TRUE(waitUntil([&] { return topics.connected(); }, 20.0)) << node.err();
-  topics.feed(record_, resume_at, kSamples);
+  topics.feed(record_, resume_at, kSamples, topic_road);
   const auto resumed = topics.estimates.messages();
   ASSERT_EQ(resumed.size(), kSamples - resume_at);
   EXPECT_EQ(resumed.front().sample_index, resume_at + 1);
@@ -202,9 +238,19 @@ TEST_F(EstimatorCheckpoint, KilledAndRestartedEqualsUninterruptedRun) {
   EXPECT_EQ(node.wait(20.0), 0) << node.err();
   EXPECT_NE(node.out().find("resumed from " + file + " at sample 35, t = 1.05"), std::string::npos)
       << node.out();
+  EXPECT_NE(node.out().find(topic_road ? "(topic road" : "(analytic road"), std::string::npos)
+      << node.out();
   // The shutdown checkpoint holds the whole record.
   EXPECT_EQ(readCheckpoint(file).full.samples, static_cast<int>(kSamples));
   std::filesystem::remove(file);
+}
+
+TEST_F(EstimatorCheckpoint, KilledAndRestartedEqualsUninterruptedRun) {
+  killAndResume("/ckpt_run", false);
+}
+
+TEST_F(EstimatorCheckpoint, KilledAndRestartedWithTopicRoadEqualsUninterruptedRun) {
+  killAndResume("/ckpt_road", true);
 }
 
 TEST_F(EstimatorCheckpoint, ShutdownWritesAndAnotherConfigIsRefused) {

@@ -61,14 +61,7 @@ inline Record syntheticRecord(const EstimatorConfig& c, std::uint64_t seed,
   const auto model = makeModel(c, road);
   Record r;
   r.samples = synthesizeFromConfig(c, *model, seed);
-  const long count = static_cast<long>(std::ceil(r.samples.back().time * road_rate - 1e-9)) + 1;
-  for (long i = 0; i < count; ++i) {
-    const double t = static_cast<double>(i) / road_rate;
-    const Eigen::Vector2d y = road->height(t);
-    r.road.t.push_back(t);
-    r.road.left.push_back(y(0));
-    r.road.right.push_back(y(1));
-  }
+  r.road = sampleRoad(*road, r.samples.back().time, road_rate);
   return r;
 }
 

@@ -39,7 +39,7 @@ bool sameBits(double a, double b) { return std::memcmp(&a, &b, sizeof a) == 0; }
 Checkpoint sampleCheckpoint() {
   Checkpoint c;
   c.config_hash = 0x8000000000000001ull;  // top bit set: no signed overflow
-  c.road_mode = "analytic";
+  c.road_mode = "topic";
   c.origin = {999, 970000000};
   c.last_sample = {1001, 50000000};
   c.full.x.resize(3, 4);
@@ -65,6 +65,10 @@ Checkpoint sampleCheckpoint() {
   b.values = Eigen::VectorXd::Constant(1, -1.0 / 7.0);
   c.batch_samples = {a, b};
   c.batch_last_stamp = {1000, 60000000};
+  c.road.t = {0.9, 0.9 + 1.0 / 3.0, 1.3};
+  c.road.left = {0.0, 1e-300, -0.1 / 3.0};
+  c.road.right = {0.05, -0.0, 2.0 / 7.0};
+  c.road_last_stamp = {1001, 270000000};
   c.counters = {{"samples_received", 40}, {"samples_rejected.duplicate_stamp", 2}};
   return c;
 }
@@ -85,7 +89,7 @@ TEST(Checkpoint, RoundTripIsBitExact) {
   EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
   const Checkpoint r = readCheckpoint(path);
   EXPECT_EQ(r.config_hash, c.config_hash);
-  EXPECT_EQ(r.road_mode, "analytic");
+  EXPECT_EQ(r.road_mode, "topic");
   EXPECT_EQ(r.origin.sec, 999u);
   EXPECT_EQ(r.origin.nsec, 970000000u);
   EXPECT_EQ(r.last_sample.sec, 1001u);
@@ -109,6 +113,14 @@ TEST(Checkpoint, RoundTripIsBitExact) {
   EXPECT_TRUE(sameBits(r.batch_samples[1].values(0), -1.0 / 7.0));
   EXPECT_TRUE(sameBits(r.batch_samples[1].time, 0.06));
   EXPECT_EQ(r.batch_last_stamp.nsec, 60000000u);
+  ASSERT_EQ(r.road.t.size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_TRUE(sameBits(r.road.t[i], c.road.t[i])) << i;
+    EXPECT_TRUE(sameBits(r.road.left[i], c.road.left[i])) << i;
+    EXPECT_TRUE(sameBits(r.road.right[i], c.road.right[i])) << i;
+  }
+  EXPECT_EQ(r.road_last_stamp.sec, 1001u);
+  EXPECT_EQ(r.road_last_stamp.nsec, 270000000u);
   EXPECT_EQ(r.counters, c.counters);
 
   // Rewritten in place: the new state replaces the old one.
@@ -116,11 +128,14 @@ TEST(Checkpoint, RoundTripIsBitExact) {
   next.full.samples = 43;
   next.coherence_disagreement.reset();
   next.batch_samples.clear();
+  next.road_mode = "analytic";
+  next.road = RoadSeries{};
   writeCheckpoint(next, path);
   const Checkpoint r2 = readCheckpoint(path);
   EXPECT_EQ(r2.full.samples, 43);
   EXPECT_FALSE(r2.coherence_disagreement.has_value());
   EXPECT_TRUE(r2.batch_samples.empty());
+  EXPECT_TRUE(r2.road.t.empty());
   std::filesystem::remove(path);
 }
 
@@ -165,6 +180,10 @@ TEST(Checkpoint, DamagedValuesAreRefusedNamingTheKey) {
       {editLine(text, "full.time", "full.time = nan"), "key 'full.time': 'nan' is not a finite"},
       {editLine(text, "full.time", "full.time = 1.08x"), "'1.08x' is not a finite number"},
       {editLine(text, "road_mode", "road_mode = bag"), "key 'road_mode': 'bag'"},
+      {editLine(text, "road_mode", "road_mode = analytic"), "road samples with road_mode analytic"},
+      {editLine(text, "road.2", "road.2 = 0.9 0 0"), "key 'road.2': time not after the previous"},
+      {editLine(text, "road.1", "road.1 = 1 2"), "key 'road.1': expected 3 values, got 2"},
+      {editLine(text, "format", "format = pc_ekf_checkpoint 1"), "expected 'pc_ekf_checkpoint 2'"},
       {editLine(text, "config_hash", "config_hash = 12"), "key 'config_hash'"},
       {editLine(text, "counter.samples_received", "colour.red = 1"), "key 'colour.red': unknown"},
       {editLine(text, "origin", "origin = 5 1000000000"), "key 'origin'"},
