@@ -59,7 +59,7 @@ fi
 pc_ekf_log "tests took $((SECONDS - tests_start)) s"
 if [ "$sanitize" -eq 1 ]; then
   unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
-  pc_ekf_sanitize_results "$results" "$sanitizer_logs"
+  pc_ekf_sanitize_results "$results" "$sanitizer_logs" "$PC_EKF_ROOT/.build/tests$suffix.log"
 fi
 
 if [ "$fuzz" -eq 1 ]; then

@@ -12,35 +12,48 @@ pc_ekf_sanitize_cmake_args() {
   echo "-DCMAKE_SHARED_LINKER_FLAGS=$PC_EKF_SANITIZE_FLAGS"
 }
 
-# Every report goes to LOG_DIR/{asan,ubsan}.<pid> (log_path) instead of the
+# ASan and LSan reports go to LOG_DIR/asan.<pid> (log_path) instead of the
 # test's output, so a report after a test has written its passing XML (a
-# leak found at exit) is still seen. Leak suppressions: lib/lsan.supp.
+# leak found at exit) is still seen. GCC's UBSan runtime, linked beside
+# ASan's, ignores log_path and prints to stderr (checked with a one-line
+# out-of-bounds program): its "runtime error:" lines are found in the test
+# log and in the ROS logs, which go to LOG_DIR/ros_log for this run.
+# Leak suppressions: lib/lsan.supp.
 pc_ekf_sanitize_env() {
   local dir=$1
   rm -rf "$dir"
-  mkdir -p "$dir"
+  mkdir -p "$dir/ros_log"
+  export ROS_LOG_DIR=$dir/ros_log
   export ASAN_OPTIONS="log_path=$dir/asan:detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1:check_initialization_order=1"
   export UBSAN_OPTIONS="log_path=$dir/ubsan:print_stacktrace=1:halt_on_error=1"
   export LSAN_OPTIONS="suppressions=$PC_EKF_ROOT/launch_free_scripts/lib/lsan.supp:print_suppressions=0"
 }
 
 # Writes RESULTS/sanitizer.xml: test case sanitizer.reports, failed with the
-# summary of each report file in LOG_DIR.
+# summary of each report file in LOG_DIR and of each UBSan "runtime error:"
+# in TEXT_LOG... and LOG_DIR/ros_log.
+#   pc_ekf_sanitize_results RESULTS LOG_DIR [TEXT_LOG...]
 pc_ekf_sanitize_results() {
-  /usr/bin/python3 - "$1/sanitizer.xml" "$2" <<'PY'
+  /usr/bin/python3 - "$1/sanitizer.xml" "$2" "${@:3}" <<'PY'
 import glob, os, re, sys, xml.etree.ElementTree as ET
-out, logs = sys.argv[1], sys.argv[2]
-reports = sorted(glob.glob(os.path.join(logs, "*san.*")))
-suite = ET.Element("testsuite", name="sanitizer", tests="1", failures=str(int(bool(reports))))
+out, logs, texts = sys.argv[1], sys.argv[2], sys.argv[3:]
+texts += [p for p in glob.glob(os.path.join(logs, "ros_log", "**"), recursive=True) if os.path.isfile(p)]
+found = []  # (where, summary lines)
+for path in sorted(glob.glob(os.path.join(logs, "*san.*"))):
+    lines = open(path, errors="replace").read().splitlines()
+    keep = [l for l in lines if re.search(r"ERROR:|SUMMARY:|runtime error:|^\s+#[0-5] ", l)]
+    found.append((os.path.basename(path), keep[:12]))
+for path in texts:
+    lines = open(path, errors="replace").read().splitlines()
+    for i, l in enumerate(lines):
+        if "runtime error:" in l:
+            found.append(("%s line %d" % (path, i + 1), lines[i:i + 6]))
+suite = ET.Element("testsuite", name="sanitizer", tests="1", failures=str(int(bool(found))))
 case = ET.SubElement(suite, "testcase", classname="sanitizer", name="reports")
-if reports:
-    text = []
-    for path in reports:
-        lines = open(path, errors="replace").read().splitlines()
-        keep = [l for l in lines if re.search(r"ERROR:|SUMMARY:|runtime error:|^\s+#[0-5] ", l)]
-        text.append("%s:\n  %s" % (os.path.basename(path), "\n  ".join(keep[:12])))
-    ET.SubElement(case, "failure", message="%d sanitizer report(s) in %s" % (len(reports), logs)).text = "\n".join(text)
-    print("\n".join(text))
+if found:
+    text = "\n".join("%s:\n  %s" % (where, "\n  ".join(keep)) for where, keep in found)
+    ET.SubElement(case, "failure", message="%d sanitizer report(s)" % len(found)).text = text
+    print(text)
 ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
 PY
 }
