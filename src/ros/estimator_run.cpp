@@ -143,6 +143,13 @@ void EstimatorRun::resumeFrom(const Checkpoint& c, const std::string& path) {
   };
   fits(c.full, "full");
   fits(c.decimated, "decimated");
+  const int parameters = propagator_->parameterCount();
+  if (c.coherence_disagreement && c.coherence_disagreement->size() != parameters) {
+    throw CheckpointError("checkpoint " + path + ": key 'coherence_disagreement' has " +
+                          std::to_string(c.coherence_disagreement->size()) +
+                          " values, this configuration estimates " + std::to_string(parameters) +
+                          " parameters");
+  }
   const int channels = static_cast<int>(propagator_->model().channelNames().size());
   for (std::size_t i = 0; i < c.batch_samples.size(); ++i) {
     const std::string problem = measurementProblem(c.batch_samples[i], channels);

@@ -283,6 +283,21 @@ TEST_F(EstimatorCheckpoint, ShutdownWritesAndAnotherConfigIsRefused) {
   EXPECT_NE(err.find("configuration changed"), std::string::npos) << err;
   EXPECT_EQ(readCheckpoint(file).full.samples, 3);  // left for the right configuration
 
+  // Right hash, state that does not fit: refused naming the key.
+  {
+    std::string text = readText(file);
+    const std::size_t at = text.find("coherence_disagreement = ");
+    ASSERT_NE(at, std::string::npos);
+    text.replace(at, text.find('\n', at) - at, "coherence_disagreement = 3 0.1 0.2 0.3");
+    std::ofstream(file) << text;
+    NodeProcess misfit("/ckpt_config", params(file));
+    EXPECT_EQ(misfit.wait(30.0), 2) << misfit.err();
+    EXPECT_NE(misfit.err().find("key 'coherence_disagreement' has 3 values, this configuration "
+                                "estimates 2 parameters"),
+              std::string::npos)
+        << misfit.err();
+  }
+
   // A damaged file is refused too, naming it.
   std::ofstream(file) << "format = pc_ekf_checkpoint 1\nconfig_hash = 0x00";
   NodeProcess corrupt("/ckpt_config", params(file));
