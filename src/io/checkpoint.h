@@ -1,7 +1,7 @@
 // estimator_node's checkpoint: the filter state of the current run, its
 // time origin and counters, and a hash of the configuration it was computed
-// under, as a small "key = value" text file. Doubles are written with 17
-// significant digits so that a resumed filter continues bit-exactly.
+// under, as a small "key = value" text file. Doubles are written in their
+// shortest round-trip form so that a resumed filter continues bit-exactly.
 // Written to `path.tmp`, fsync'ed, then renamed over `path` (atomic on
 // POSIX): a reader sees the previous checkpoint or the new one, never half.
 #pragma once
