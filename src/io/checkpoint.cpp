@@ -29,16 +29,10 @@ constexpr const char* kCounterPrefix = "counter.";
 // Shortest text that reads back as the same double (std::to_chars): as
 // bit-exact as %.17g, shorter and faster (a checkpoint with 10^5 batch
 // samples: 334 -> 150 ms written and synced, 12 -> 11 MB).
-void appendNumber(std::string& out, double v) {
+std::string number(double v) {
   char text[40];
   const auto r = std::to_chars(text, text + sizeof(text), v);
-  out.append(text, r.ptr);
-}
-
-std::string number(double v) {
-  std::string s;
-  appendNumber(s, v);
-  return s;
+  return std::string(text, r.ptr);
 }
 
 std::string stampText(const CheckpointStamp& s) {
@@ -53,33 +47,11 @@ std::string matrixText(const Eigen::MatrixXd& m) {
   return s;
 }
 
-// "batch.<i> = time n channels... values..." lines, appended to `out`.
-void appendBatch(std::string& out, const MeasurementSeries& batch) {
-  for (std::size_t i = 0; i < batch.size(); ++i) {
-    const Measurement& m = batch[i];
-    out += "batch." + std::to_string(i) + " = ";
-    appendNumber(out, m.time);
-    out += " " + std::to_string(m.channels.size());
-    for (int c : m.channels) out += " " + std::to_string(c);
-    for (Eigen::Index k = 0; k < m.values.size(); ++k) {
-      out += ' ';
-      appendNumber(out, m.values(k));
-    }
-    out += '\n';
-  }
-}
-
-// "road.<i> = t left right" lines, appended to `out`.
-void appendRoad(std::string& out, const RoadSeries& road) {
-  for (std::size_t i = 0; i < road.t.size(); ++i) {
-    out += "road." + std::to_string(i) + " = ";
-    appendNumber(out, road.t[i]);
-    out += ' ';
-    appendNumber(out, road.left[i]);
-    out += ' ';
-    appendNumber(out, road.right[i]);
-    out += '\n';
-  }
+std::string measurementText(const Measurement& m) {
+  std::string s = number(m.time) + " " + std::to_string(m.channels.size());
+  for (int c : m.channels) s += " " + std::to_string(c);
+  for (Eigen::Index i = 0; i < m.values.size(); ++i) s += " " + number(m.values(i));
+  return s;
 }
 
 void writeFilter(std::ostream& out, const std::string& name, const FilterCheckpoint& f) {
@@ -326,14 +298,15 @@ void writeCheckpoint(const Checkpoint& c, const std::string& path) {
   }
   out << "batch.samples = " << c.batch_samples.size() << "\n";
   out << "batch.last_stamp = " << stampText(c.batch_last_stamp) << "\n";
-  std::string lines;
-  appendBatch(lines, c.batch_samples);
-  out << lines;
+  for (std::size_t i = 0; i < c.batch_samples.size(); ++i) {
+    out << "batch." << i << " = " << measurementText(c.batch_samples[i]) << "\n";
+  }
   out << "road.samples = " << c.road.t.size() << "\n";
   out << "road.last_stamp = " << stampText(c.road_last_stamp) << "\n";
-  lines.clear();
-  appendRoad(lines, c.road);
-  out << lines;
+  for (std::size_t i = 0; i < c.road.t.size(); ++i) {
+    out << "road." << i << " = " << number(c.road.t[i]) << " " << number(c.road.left[i]) << " "
+        << number(c.road.right[i]) << "\n";
+  }
   for (const auto& [name, value] : c.counters) {
     out << kCounterPrefix << name << " = " << value << "\n";
   }

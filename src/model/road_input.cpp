@@ -103,11 +103,14 @@ void SampledRoad::append(double t, double left, double right) {
   right_.push_back(right);
 }
 
-void SampledRoad::discardBefore(double t) {
-  // First sample strictly after t; keep the one before it (if any) for interpolation.
+std::size_t SampledRoad::indexNeededFor(double t) const {
+  // First sample strictly after t; the one before it (if any) is needed for interpolation.
   const auto after = std::upper_bound(t_.begin(), t_.end(), t);
-  if (after == t_.begin()) return;
-  const auto n = (after - t_.begin()) - 1;
+  return after == t_.begin() ? 0 : static_cast<std::size_t>(after - t_.begin()) - 1;
+}
+
+void SampledRoad::discardBefore(double t) {
+  const auto n = static_cast<std::ptrdiff_t>(indexNeededFor(t));
   t_.erase(t_.begin(), t_.begin() + n);
   left_.erase(left_.begin(), left_.begin() + n);
   right_.erase(right_.begin(), right_.begin() + n);

@@ -61,6 +61,9 @@ class SampledRoad : public RoadInput {
   SampledRoad(std::vector<double> t, std::vector<double> left, std::vector<double> right);
   // Throws std::invalid_argument when t is not strictly after the last sample or values are not finite.
   void append(double t, double left, double right);
+  // Index of the first sample that interpolation at times >= t needs: the one
+  // at or before t (0 when t precedes every sample).
+  std::size_t indexNeededFor(double t) const;
   // Drops samples older than t, keeping the one at or before t (bounded buffers).
   void discardBefore(double t);
   bool empty() const { return t_.empty(); }

@@ -71,15 +71,11 @@ void EstimatorTimeline::resume(RoadMode mode, const ros::Time& origin,
 }
 
 RoadSeries EstimatorTimeline::roadFrom(double t) const {
-  const std::vector<double>& times = road_->times();
-  auto first = std::upper_bound(times.begin(), times.end(), t);
-  if (first != times.begin()) --first;
-  const auto i = first - times.begin();
-  RoadSeries r;
-  r.t.assign(first, times.end());
-  r.left.assign(road_->leftHeights().begin() + i, road_->leftHeights().end());
-  r.right.assign(road_->rightHeights().begin() + i, road_->rightHeights().end());
-  return r;
+  const auto i = static_cast<std::ptrdiff_t>(road_->indexNeededFor(t));
+  const auto tail = [i](const std::vector<double>& v) {
+    return std::vector<double>(v.begin() + i, v.end());
+  };
+  return {tail(road_->times()), tail(road_->leftHeights()), tail(road_->rightHeights())};
 }
 
 StampVerdict EstimatorTimeline::order(const std::optional<ros::Time>& last,
