@@ -34,7 +34,7 @@ trap pc_ekf_stop_owned EXIT
 trap 'exit 130' INT TERM  # through the EXIT trap
 
 # The estimate collector (lib/collect_estimates.py) is rospy and calls a std_srvs service.
-pc_ekf_ensure_packages python3-rospy python3-std-srvs
+pc_ekf_ensure_packages
 pc_ekf_log "building (log: .build/build.log)"
 mkdir -p "$PC_EKF_ROOT/.build"
 pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {

@@ -40,7 +40,7 @@ config=$(cd "$(dirname "$config")" && pwd)/$(basename "$config")
 trap pc_ekf_stop_owned EXIT
 trap 'exit 130' INT TERM
 
-pc_ekf_ensure_packages python3-rospy python3-std-srvs
+pc_ekf_ensure_packages
 if [ ! -x "$PC_EKF_WS/devel/lib/pc_ekf/estimator_node" ] || [ ! -x "$PC_EKF_WS/devel/lib/pc_ekf/replay_node" ]; then
   pc_ekf_log "building (log: .build/build.log)"
   pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # THE test command: installs what is missing, builds, runs every gtest and
-# rostest, and ends with "N passed, N failed" (N = test cases).
+# rostest, checks that the install list covers every package used
+# (lib/check_install_list.py), and ends with "N passed, N failed" (N = test cases).
 #   --colcon     also check that `colcon build` succeeds (separate workspace)
 #   --sanitize   instead: build .build/catkin_ws_sanitize with ASan + UBSan
 #                (RelWithDebInfo) and run every gtest and rostest there; any
@@ -22,7 +23,7 @@ for arg in "$@"; do
     --colcon) check_colcon=1 ;;
     --sanitize) sanitize=1; fuzz=0 ;;
     --no-fuzz) fuzz=0 ;;
-    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "test.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
@@ -61,6 +62,11 @@ if [ "$sanitize" -eq 1 ]; then
   unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
   pc_ekf_sanitize_results "$results" "$sanitizer_logs" "$PC_EKF_ROOT/.build/tests$suffix.log"
 fi
+
+# The install list covers every package used (a fresh machine has only it).
+mkdir -p "$results"
+(pc_ekf_source_workspace && /usr/bin/python3 "$here/lib/check_install_list.py" \
+   "$results/install_list.xml" "${PC_EKF_APT_PACKAGES[@]}") || pc_ekf_log "install list check FAILED"
 
 if [ "$fuzz" -eq 1 ]; then
   fuzz_start=$SECONDS

@@ -11,8 +11,8 @@ export ROS_LOG_DIR=${ROS_LOG_DIR:-$ROS_HOME/log}
 PC_EKF_APT_PACKAGES=(
   build-essential cmake libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev
   libbenchmark-dev ros-core-dev python3-rostest python3-roslaunch python3-rosmaster
-  python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev colcon
-  python3-colcon-ros python3-matplotlib python3-numpy
+  python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev libnodeletlib-tools colcon
+  python3-colcon-ros python3-matplotlib python3-numpy python3-rospy python3-std-srvs
   clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
 )
 
