@@ -1,5 +1,6 @@
 #include "filter/batch_update.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 #include "filter/trajectory_simulation.h"
@@ -56,7 +57,7 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
 
 BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, UpdateRule rule,
-                        const std::vector<double>& alphas) {
+                        const std::vector<double>& alphas, SupportRule support) {
   if (alphas.empty()) throw std::invalid_argument("batchUpdate: no iterations");
   BatchResult result;
   Eigen::MatrixXd theta = propagator.priorState().bottomRows(propagator.parameterCount());
@@ -69,8 +70,20 @@ BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries&
       result.finite = false;
       break;
     }
-    const Eigen::VectorXd r = alphas[i] * noise.variances(obs.z);
+    const Eigen::VectorXd r = alphas[i] * noise.stackedVariances(series);
+    const Eigen::MatrixXd before = theta;
     const UpdateDiagnostics d = pcKalmanUpdate(theta, obs.z_coeffs, obs.z, r, rule);
+    if (support == SupportRule::kDamp && d.finite) {
+      const ParameterMapping& map = propagator.mapping();
+      Eigen::VectorXd lower(map.count()), upper(map.count());
+      for (int p = 0; p < map.count(); ++p) {
+        lower[p] = map.lowerBound(p);
+        upper[p] = map.upperBound(p);
+      }
+      const double gamma = supportDamping(before.col(0), theta.col(0), lower, upper);
+      if (gamma < 1.0) theta = before + gamma * (theta - before);
+      result.damping = std::min(result.damping, gamma);
+    }
     if (i == 0) result.nis = d.nis;
     result.iterations = static_cast<int>(i + 1);
     if (!d.finite) {

@@ -11,6 +11,7 @@
 #include "filter/kalman_update.h"
 #include "filter/measurement.h"
 #include "filter/pc_propagator.h"
+#include "filter/update_safeguards.h"
 
 namespace pc_ekf {
 
@@ -22,6 +23,7 @@ struct BatchResult {
   double nis = 0.0;            // of the first iteration (prior predictive)
   bool finite = true;
   ForecastReport forecast;     // merged over iterations
+  double damping = 1.0;        // smallest fraction of an iteration's update applied (support rule)
 };
 
 // Stacked observation coefficients (observations x S) of the parameter
@@ -38,6 +40,7 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
 // sum(1/alpha_i) = 1 (default four times 4). R_i = alpha_i R.
 BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, UpdateRule rule,
-                        const std::vector<double>& alphas);
+                        const std::vector<double>& alphas,
+                        SupportRule support = SupportRule::kIgnore);
 
 }  // namespace pc_ekf

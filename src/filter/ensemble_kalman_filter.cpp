@@ -88,7 +88,7 @@ EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
     const Eigen::MatrixXd hx = h * x.topRows(ns);
     const Eigen::VectorXd xm = x.rowwise().mean(), zm = hx.rowwise().mean();
     const Eigen::MatrixXd a = x.colwise() - xm, y = hx.colwise() - zm;
-    const Eigen::VectorXd r = settings_.noise.variances(m.values);
+    const Eigen::VectorXd r = settings_.noise.variances(m);
     const double scale = std::sqrt(double(ne - 1));
     if (settings_.square_root) {
       // Mean and scaled anomalies play the role of PC coefficients.

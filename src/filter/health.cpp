@@ -26,6 +26,12 @@ std::vector<std::string> HealthStatus::warnings() const {
     w.push_back(o.str());
   }
   if (support_exceeded) w.push_back("parameter PDF mass outside the prior support");
+  if (gated) w.push_back("innovation gate: sample not used (NIS " + std::to_string(nis) + ")");
+  if (damped) {
+    w.push_back("update damped: the data pushed a parameter mean out of its prior support "
+                "(model error, or a parameter that should be declared uncertain)");
+  }
+  if (reopened) w.push_back("uncertainty re-opened after a persistent NIS violation");
   return w;
 }
 

@@ -35,7 +35,12 @@ struct HealthStatus {
   bool non_finite = false;               // drives health
   bool forecast_failed = false;          // drives health
   bool band_nested = true;               // informational only
-  bool healthy() const { return !non_finite && !forecast_failed && !nis_window_outside; }
+  bool gated = false;     // NIS above the innovation gate: sample not used
+  bool damped = false;    // update scaled down to keep the means in the support; drives health
+  bool reopened = false;  // uncertainty re-opened after a persistent violation
+  bool healthy() const {
+    return !non_finite && !forecast_failed && !nis_window_outside && !damped && !reopened;
+  }
   std::vector<std::string> warnings() const;
 };
 

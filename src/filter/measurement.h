@@ -15,13 +15,26 @@ struct Measurement {
 
 using MeasurementSeries = std::vector<Measurement>;
 
-// Filter noise of SPEC §1.6: R_jj = max(r_floor, (r_relative * z_obs,j)^2).
+// Filter noise R (diagonal), by one of two rules:
+//  paper  (paper eq. 50-54): R_jj = max(r_floor, (r_relative * z_obs,j)^2)
+//  sensor (real sensors):   R_jj = std_c^2 + (r_relative * z_obs,j)^2, std_c the
+//         absolute noise of the reading's channel c (datasheet noise floor).
+// Both scale with the observation, not the prediction: R is then fixed by the
+// data, the same for every method, collocation point and iteration, and the
+// exact posterior stays a weighted least-squares problem. The sensor rule's
+// floor keeps R from collapsing at zero readings.
+enum class NoiseRule { kPaper, kSensor };
+
 struct NoiseModel {
+  NoiseModel() = default;
+  NoiseModel(double relative, double floor) : r_relative(relative), r_floor(floor) {}
   double r_relative = 0.01;
-  double r_floor = 1e-12;
-  Eigen::VectorXd variances(const Eigen::VectorXd& observed) const {
-    return (r_relative * observed.array()).square().max(r_floor).matrix();
-  }
+  double r_floor = 1e-12;         // paper rule
+  NoiseRule rule = NoiseRule::kPaper;
+  Eigen::VectorXd channel_std;    // sensor rule: one per model channel
+  Eigen::VectorXd variances(const Measurement& m) const;
+  // Over a whole record, stacked in sample order.
+  Eigen::VectorXd stackedVariances(const std::vector<Measurement>& series) const;
 };
 
 // Every k-th sample (k = decimation), keeping samples k, 2k, ... (1-based).

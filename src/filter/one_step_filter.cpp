@@ -1,5 +1,7 @@
 #include "filter/one_step_filter.h"
 
+#include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "pc/pc_statistics.h"
@@ -24,12 +26,34 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
     : propagator_(std::move(propagator)),
       settings_(settings),
       health_(*propagator_, settings.health),
-      x_(propagator_->priorState()) {}
+      x_(propagator_->priorState()) {
+  const int n = propagator_->parameterCount();
+  lower_.resize(n);
+  upper_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    lower_[i] = propagator_->mapping().lowerBound(i);
+    upper_[i] = propagator_->mapping().upperBound(i);
+  }
+  if (settings_.drift.size() != 0 && settings_.drift.size() != n) {
+    throw std::invalid_argument("drift: one intensity per uncertain parameter expected");
+  }
+}
+
+double OneStepFilter::gateBound(int dof) {
+  if (dof >= static_cast<int>(gate_cache_.size())) {
+    gate_cache_.resize(dof + 1, std::numeric_limits<double>::quiet_NaN());
+  }
+  double& b = gate_cache_[dof];
+  if (std::isnan(b)) b = chiSquareQuantile(1.0 - settings_.innovation_gate, dof);
+  return b;
+}
 
 void OneStepFilter::reset() {
   x_ = propagator_->priorState();
   t_ = 0.0;
   samples_ = 0;
+  rejected_ = 0;
+  violations_ = 0;
   health_.reset();
 }
 
@@ -40,6 +64,7 @@ void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) 
   x_ = x;
   t_ = time;
   samples_ = samples;
+  violations_ = 0;
   health_.reset();
 }
 
@@ -50,11 +75,18 @@ StepResult OneStepFilter::process(const Measurement& m) {
   if (m.time < t_) throw std::invalid_argument("measurement rejected: time before the filter's");
 
   StepResult r;
+  const double dt = m.time - t_;
   r.forecast = propagator_->forecast(x_, t_, m.time);
+  const int ns = propagator_->stateCount();
+  const int np = propagator_->parameterCount();
+  if (r.forecast.ok && settings_.drift.size() != 0) {
+    Eigen::MatrixXd theta = x_.bottomRows(np);
+    applyDrift(theta, settings_.drift, dt, propagator_->basis());
+    x_.bottomRows(np) = theta;
+  }
   t_ = m.time;
   r.index = ++samples_;
   r.time = m.time;
-  const int ns = propagator_->stateCount();
   if (!m.channels.empty() && r.forecast.ok) {
     // Observation coefficients Z = H X_y of the observed channels.
     z_coeffs_.resize(static_cast<Eigen::Index>(m.channels.size()), x_.cols());
@@ -62,16 +94,59 @@ StepResult OneStepFilter::process(const Measurement& m) {
       z_coeffs_.row(i).noalias() =
           model.observationMatrix().row(m.channels[i]).lazyProduct(x_.topRows(ns));
     }
-    r.update = pcKalmanUpdate(x_, z_coeffs_, m.values, settings_.noise.variances(m.values),
+    x_before_ = x_;
+    r.update = pcKalmanUpdate(x_, z_coeffs_, m.values, settings_.noise.variances(m),
                               settings_.rule);
+    safeguard(r);
   } else {
     r.update.finite = x_.allFinite();
   }
   r.coefficients = x_.bottomRows(propagator_->parameterCount());
   r.mean = pcMean(r.coefficients);
   r.stddev = pcStddev(r.coefficients);
-  r.health = health_.assess(r.update, r.forecast, r.coefficients);
+  // The window sees a gated sample's NIS clipped at the gate: a persistent
+  // misfit still breaks the window, one wild outlier does not dominate it.
+  UpdateDiagnostics seen = r.update;
+  if (r.gated) seen.nis = std::min(seen.nis, gateBound(r.update.channels));
+  if (r.rolled_back) seen.finite = false;
+  r.health = health_.assess(seen, r.forecast, r.coefficients);
+  r.health.nis = r.update.nis;
+  r.health.gated = r.gated;
+  r.health.damped = r.damping < 1.0;
+  r.rejected = rejected_;
+  violations_ = r.health.nis_window_outside ? violations_ + 1 : 0;
+  if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
+    Eigen::MatrixXd theta = x_.bottomRows(np);
+    reopenParameters(theta, propagator_->priorState().bottomRows(np), settings_.reopen);
+    x_.bottomRows(np) = theta;
+    health_.reset();
+    violations_ = 0;
+    r.reopened = true;
+    r.health.reopened = true;
+  }
   return r;
+}
+
+void OneStepFilter::safeguard(StepResult& r) {
+  const int np = propagator_->parameterCount();
+  if (!r.update.finite || !x_.allFinite()) {
+    // Keep the forecast: a non-finite state would poison every later sample.
+    x_ = x_before_;
+    r.rolled_back = true;
+    ++rejected_;
+    return;
+  }
+  if (settings_.innovation_gate > 0.0 && r.update.nis > gateBound(r.update.channels)) {
+    x_ = x_before_;
+    r.gated = true;
+    ++rejected_;
+    return;
+  }
+  if (settings_.support == SupportRule::kDamp) {
+    r.damping = supportDamping(x_before_.bottomRows(np).col(0), x_.bottomRows(np).col(0), lower_,
+                               upper_);
+    if (r.damping < 1.0) x_ = x_before_ + r.damping * (x_ - x_before_);
+  }
 }
 
 }  // namespace pc_ekf

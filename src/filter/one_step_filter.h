@@ -10,6 +10,7 @@
 #include "filter/kalman_update.h"
 #include "filter/measurement.h"
 #include "filter/pc_propagator.h"
+#include "filter/update_safeguards.h"
 
 namespace pc_ekf {
 
@@ -17,6 +18,12 @@ struct OneStepSettings {
   UpdateRule rule = UpdateRule::kSquareRoot;
   NoiseModel noise;
   HealthSettings health;
+  // Innovation gate: a sample whose NIS exceeds the chi-square quantile
+  // 1 - innovation_gate (its channel count as dof) is not used (0 = off).
+  double innovation_gate = 0.0;
+  SupportRule support = SupportRule::kIgnore;
+  Eigen::VectorXd drift;  // per parameter, random-walk std per sqrt(s) (empty = none)
+  ReopenSettings reopen;
 };
 
 struct StepResult {
@@ -27,6 +34,11 @@ struct StepResult {
   UpdateDiagnostics update;
   ForecastReport forecast;
   HealthStatus health;
+  bool gated = false;     // NIS above the innovation gate: the update was not applied
+  bool rolled_back = false;  // the update was not finite: the forecast state was kept
+  double damping = 1.0;   // fraction of the update applied (support rule)
+  bool reopened = false;  // uncertainty re-opened after this sample
+  int rejected = 0;       // samples gated or rolled back since the prior
 };
 
 class OneStepFilter {
@@ -43,15 +55,25 @@ class OneStepFilter {
   double time() const { return t_; }
   int samples() const { return samples_; }
   const OneStepSettings& settings() const { return settings_; }
-  // Restores a checkpointed state (same propagator and settings).
+  // Restores a state (same propagator and settings); the rejected count is kept.
   void restore(const Eigen::MatrixXd& x, double time, int samples);
+  int rejected() const { return rejected_; }
 
  private:
   std::shared_ptr<const PcPropagator> propagator_;
   OneStepSettings settings_;
   HealthMonitor health_;
+  // Gate threshold for `dof` channels (cached: quantiles are iterative).
+  double gateBound(int dof);
+  void safeguard(StepResult& r);
+
   Eigen::MatrixXd x_;
+  Eigen::MatrixXd x_before_;  // state before the update (gate, roll-back, damping)
   Eigen::MatrixXd z_coeffs_;  // per-sample buffer
+  Eigen::VectorXd lower_, upper_;  // parameter supports
+  std::vector<double> gate_cache_;
+  int rejected_ = 0;
+  int violations_ = 0;  // consecutive samples with the windowed NIS outside
   double t_ = 0.0;
   int samples_ = 0;
 };

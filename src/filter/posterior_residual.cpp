@@ -32,7 +32,7 @@ Eigen::MatrixXd whitenedResiduals(const MeasurementSeries& series, const NoiseMo
   Eigen::Index row = 0;
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Measurement& m = series[k];
-    const Eigen::VectorXd scale = noise.variances(m.values).cwiseSqrt().cwiseInverse();
+    const Eigen::VectorXd scale = noise.variances(m).cwiseSqrt().cwiseInverse();
     for (std::size_t c = 0; c < m.channels.size(); ++c, ++row) {
       const int ch = m.channels[c];
       if (ch < 0 || ch >= channels[k].rows()) {

@@ -45,7 +45,13 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
 }
 
 NoiseModel makeNoiseModel(const EstimatorConfig& c) {
-  return NoiseModel{c.measurement.r_relative, c.measurement.r_floor};
+  NoiseModel n;
+  n.rule = c.measurement.r_rule;
+  n.r_relative = c.measurement.r_relative;
+  n.r_floor = c.measurement.r_floor;
+  n.channel_std = Eigen::Map<const Eigen::VectorXd>(c.measurement.sensor_std.data(),
+                                                    c.measurement.sensor_std.size());
+  return n;
 }
 
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c) {
@@ -66,6 +72,10 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
   s.health.nis_window = c.health.nis_window;
   s.health.nis_confidence = c.health.nis_confidence;
   s.health.seed = c.pdf.seed;
+  s.innovation_gate = c.health.innovation_gate;
+  s.support = c.safeguards.support;
+  s.drift = Eigen::Map<const Eigen::VectorXd>(c.safeguards.drift.data(), c.safeguards.drift.size());
+  s.reopen = c.safeguards.reopen;
   return s;
 }
 

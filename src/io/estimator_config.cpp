@@ -135,6 +135,39 @@ std::size_t basisSize(int n, int p) {
   return static_cast<std::size_t>(std::llround(s));
 }
 
+bool readFlag(YamlMapReader& r, const std::string& key, bool value);
+
+void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
+  SafeguardConfig& s = c.safeguards;
+  std::string support = toString(s.support);
+  f.text("support", support);
+  try {
+    s.support = supportRuleFromString(support);
+  } catch (const std::invalid_argument&) {
+    f.fail("support", "'" + support + "'", "damp or ignore");
+  }
+  const std::size_t n = c.uncertain.size();
+  f.numberList("drift", s.drift, 0, n);
+  if (!s.drift.empty() && s.drift.size() != n) {
+    f.fail("drift", "a list of " + std::to_string(s.drift.size()),
+           "one random-walk intensity per uncertain parameter (" + std::to_string(n) + ")");
+  }
+  for (double d : s.drift) {
+    if (!(d >= 0.0) || !std::isfinite(d)) f.fail("drift", std::to_string(d), "intensities >= 0");
+  }
+  YamlMapReader r = f.map("reopen");
+  std::string mode = toString(s.reopen.mode);
+  r.text("mode", mode);
+  try {
+    s.reopen.mode = reopenModeFromString(mode);
+  } catch (const std::invalid_argument&) {
+    r.fail("mode", "'" + mode + "'", "off, width or prior");
+  }
+  r.number("width", s.reopen.width, 0.0, kInf, true);
+  r.integer("after", s.reopen.after, 1, 100000000);
+  r.finish();
+}
+
 void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   YamlMapReader f = root.map("filter");
   std::string update = toString(c.update);
@@ -172,6 +205,7 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   g.number("border_mass_tolerance", c.grid.border_mass_tolerance, 0.0, 1.0, true);
   g.integer("threads", c.grid.threads, 1, 256);
   g.finish();
+  readSafeguards(f, c);
   f.finish();
 
   YamlMapReader h = root.map("health");
@@ -179,6 +213,8 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   h.number("nis_confidence", c.health.nis_confidence, 0.0, 1.0, true);
   h.integer("coherence_decimation", c.health.coherence_decimation, 2, 1000000);
   h.number("coherence_threshold", c.health.coherence_threshold, 0.0, kInf, true);
+  h.number("innovation_gate", c.health.innovation_gate, 0.0, 0.5);
+  c.health.predictive_check = readFlag(h, "predictive_check", c.health.predictive_check);
   h.finish();
 
   YamlMapReader d = root.map("pdf");
@@ -310,6 +346,21 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   m.number("noise_floor", c.measurement.noise_floor, 0.0, kInf);
   m.number("r_relative", c.measurement.r_relative, 0.0, kInf);
   m.number("r_floor", c.measurement.r_floor, 0.0, kInf, true);
+  std::string r_rule = c.measurement.r_rule == NoiseRule::kSensor ? "sensor" : "paper";
+  m.text("r_rule", r_rule);
+  if (r_rule != "paper" && r_rule != "sensor") m.fail("r_rule", "'" + r_rule + "'", "paper or sensor");
+  c.measurement.r_rule = r_rule == "sensor" ? NoiseRule::kSensor : NoiseRule::kPaper;
+  m.numberList("sensor_std", c.measurement.sensor_std, 0, known.size());
+  if (c.measurement.sensor_std.size() == 1) c.measurement.sensor_std.resize(known.size(), c.measurement.sensor_std[0]);
+  if (c.measurement.r_rule == NoiseRule::kSensor) {
+    if (c.measurement.sensor_std.size() != known.size()) {
+      m.fail("sensor_std", c.measurement.sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(c.measurement.sensor_std.size()),
+             "with r_rule sensor: one absolute std per channel u1, u2, v1, v2 (or one for all)");
+    }
+    for (double v : c.measurement.sensor_std) {
+      if (!(v > 0.0)) m.fail("sensor_std", std::to_string(v), "positive standard deviations (m, m/s)");
+    }
+  }
   m.finish();
 
   YamlMapReader t = root.map("truth");

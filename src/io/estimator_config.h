@@ -10,7 +10,9 @@
 #include <vector>
 
 #include "filter/kalman_update.h"
+#include "filter/measurement.h"
 #include "filter/uncertain_parameters.h"
+#include "filter/update_safeguards.h"
 #include "model/integrator.h"
 #include "model/road_input.h"
 #include "model/roll_plane_model.h"
@@ -51,8 +53,12 @@ struct MeasurementConfig {
   std::vector<std::string> channels{"u1", "u2", "v1", "v2"};
   double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
   double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
-  double r_relative = 0.01;      // filter: R_jj = max(r_floor, (r_relative z_obs,j)^2)
+  // Filter R (see NoiseModel): paper R_jj = max(r_floor, (r_relative z_obs,j)^2);
+  // sensor R_jj = sensor_std_c^2 + (r_relative z_obs,j)^2.
+  NoiseRule r_rule = NoiseRule::kPaper;
+  double r_relative = 0.01;
   double r_floor = 1e-12;
+  std::vector<double> sensor_std;  // sensor rule: absolute std per channel u1, u2, v1, v2
 };
 
 struct TruthConfig {
@@ -90,6 +96,15 @@ struct HealthConfig {
   double nis_confidence = 0.99;  // two-sided
   int coherence_decimation = 10;
   double coherence_threshold = 3.0;
+  double innovation_gate = 0.0;  // one-step: tail probability of the NIS gate (0 = off)
+  bool predictive_check = true;  // batch methods: posterior-predictive check drives health
+};
+
+// Behaviour on data the model does not explain (filter.support, .drift, .reopen).
+struct SafeguardConfig {
+  SupportRule support = SupportRule::kDamp;
+  std::vector<double> drift;  // per uncertain parameter, random-walk std per sqrt(s) (empty = none)
+  ReopenSettings reopen;
 };
 
 struct PdfConfig {
@@ -134,6 +149,7 @@ struct EstimatorConfig {
   EnkfConfig enkf;
   GridConfig grid;
   HealthConfig health;
+  SafeguardConfig safeguards;
   PdfConfig pdf;
   NodeConfig node;
 

@@ -88,18 +88,30 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
     r->nis_window_violations += last.health.nis_window_outside;
     nested += last.health.band_nested;
     forecast_problems += last.forecast.invalid_points + last.forecast.nonfinite_points > 0;
-    nonfinite = nonfinite || last.health.non_finite || last.health.forecast_failed;
+    nonfinite = nonfinite || last.health.forecast_failed;
+    r->damped_updates += last.damping < 1.0;
+    r->reopened += last.reopened;
   }
+  r->rejected_samples = filter.rejected();
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);
   r->pdfs = pcPdfs(c, prop->basis(), last.coefficients);
   r->integrations = prop->integrations();
   for (const auto& w : last.health.warnings()) r->warnings.push_back(w);
+  if (r->rejected_samples) {
+    r->warnings.push_back(std::to_string(r->rejected_samples) +
+                          " samples not used (innovation gate or non-finite update)");
+  }
+  if (r->damped_updates) {
+    r->warnings.push_back(std::to_string(r->damped_updates) +
+                          " updates damped to keep the parameter means in their prior support");
+  }
+  if (r->reopened) r->warnings.push_back("uncertainty re-opened " + std::to_string(r->reopened) + " times");
   if (forecast_problems) {
     r->warnings.push_back(std::to_string(forecast_problems) +
                           " samples had collocation points outside the model's domain");
   }
-  r->healthy = !nonfinite && !last.health.nis_window_outside;
+  r->healthy = !nonfinite && last.health.healthy();
 
   // Multi-rate coherence (SPEC §3.6): the same filter on every k-th sample.
   const int k = c.health.coherence_decimation;
@@ -121,10 +133,25 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   }
 }
 
+// Posterior-predictive check at the final mean (health.predictive_check).
+void checkPrediction(const EstimatorConfig& c, const MeasurementSeries& series,
+                     const MechanicalModel& model, const ParameterMapping& mapping,
+                     const Eigen::VectorXd& mean, OfflineResult* r) {
+  if (!c.health.predictive_check || series.empty() || !mean.allFinite()) return;
+  r->predictive = posteriorPredictiveCheck(model, mapping.fullParameters(mean), series,
+                                           makeNoiseModel(c), c.integration, mapping.count(),
+                                           c.health.nis_confidence);
+  if (r->predictive.outside) {
+    r->healthy = false;
+    r->warnings.push_back(r->predictive.warning(model.channelNames(), series));
+  }
+}
+
 void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
               std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
               OfflineResult* r) {
-  const BatchResult b = batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas);
+  const BatchResult b =
+      batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
   SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
                    b.coefficients, b.nis, false, true, b.finite && b.forecast.ok};
   r->records.push_back(rec);
@@ -133,6 +160,13 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
   r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
   r->healthy = b.finite && b.forecast.ok;
   if (!b.forecast.first_problem.empty()) r->warnings.push_back(b.forecast.first_problem);
+  if (b.damping < 1.0) {
+    r->damped_updates = 1;
+    r->healthy = false;
+    r->warnings.push_back("update damped to keep the parameter means in their prior support "
+                          "(model error, or a parameter that should be declared uncertain)");
+  }
+  checkPrediction(c, series, prop->model(), prop->mapping(), b.mean, r);
 }
 
 void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
@@ -161,6 +195,7 @@ void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
   if (frozen) {
     r->warnings.push_back(std::to_string(frozen) + " ensemble members left the model's domain");
   }
+  checkPrediction(c, series, *model, ParameterMapping(*model, c.uncertain), last.mean, r);
 }
 
 void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
@@ -178,6 +213,7 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
   r->border_mass = p.border_mass;
   if (p.modes.size() > 1) r->warnings.push_back("posterior has " + std::to_string(p.modes.size()) + " modes");
   if (p.border_mass > 1e-3) r->warnings.push_back("fine grid border mass above 1e-3");
+  checkPrediction(c, series, *model, ParameterMapping(*model, c.uncertain), p.mean, r);
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "filter/measurement.h"
+#include "filter/predictive_check.h"
 #include "io/estimator_config.h"
 #include "model/roll_plane_model.h"
 #include "pc/pc_statistics.h"
@@ -54,6 +55,10 @@ struct OfflineResult {
   std::vector<Histogram> pdfs;  // final, one per parameter (parameter units)
   CoherenceCheck coherence;
   int nis_window_violations = 0;
+  PredictiveCheck predictive;   // batch methods, grid and EnKF (health.predictive_check)
+  int rejected_samples = 0;     // one-step: gated or rolled back
+  int damped_updates = 0;       // updates scaled down by the support rule
+  int reopened = 0;             // one-step: times the uncertainty was re-opened
   double band_nested_fraction = 1.0;
   long integrations = 0;  // point- or member-intervals, or full simulations (grid)
   double wall_seconds = 0.0;

@@ -84,7 +84,13 @@ std::string toJson(const OfflineResult& r) {
     << ", \"flagged\": " << (r.coherence.flagged ? "true" : "false") << "},\n"
     << " \"nis_window_violations\": " << r.nis_window_violations
     << ", \"band_nested_fraction\": " << number(r.band_nested_fraction)
-    << ", \"integrations\": " << r.integrations << ", \"wall_time_s\": " << number(r.wall_seconds);
+    << ", \"integrations\": " << r.integrations << ", \"wall_time_s\": " << number(r.wall_seconds)
+    << ",\n \"predictive_check\": {\"available\": " << (r.predictive.available ? "true" : "false")
+    << ", \"statistic\": " << number(r.predictive.statistic) << ", \"dof\": " << r.predictive.dof
+    << ", \"lower\": " << number(r.predictive.lower) << ", \"upper\": " << number(r.predictive.upper)
+    << ", \"outside\": " << (r.predictive.outside ? "true" : "false") << "},\n"
+    << " \"rejected_samples\": " << r.rejected_samples << ", \"damped_updates\": " << r.damped_updates
+    << ", \"reopened\": " << r.reopened;
   if (r.method == "grid") {
     o << ", \"modes\": " << r.modes << ", \"border_mass\": " << number(r.border_mass);
   }

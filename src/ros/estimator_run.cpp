@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "filter/batch_update.h"
+#include "filter/predictive_check.h"
 #include "io/estimation_setup.h"
 #include "pc/pc_statistics.h"
 #include "ros/message_conversion.h"
@@ -190,8 +191,8 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   const std::vector<double> alphas = config_.node.batch_method == BatchMethod::kEsMda
                                          ? config_.es_mda.alphas
                                          : std::vector<double>{1.0};
-  const BatchResult b =
-      batchUpdate(*propagator_, batch_series_, makeNoiseModel(config_), config_.update, alphas);
+  const BatchResult b = batchUpdate(*propagator_, batch_series_, makeNoiseModel(config_),
+                                    config_.update, alphas, config_.safeguards.support);
   const bool finite =
       b.finite && b.mean.allFinite() && b.stddev.allFinite() && b.coefficients.allFinite();
   std::ostringstream s;
@@ -217,7 +218,33 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   msg.nis_channels = static_cast<std::uint32_t>(b.observations);
   msg.band_nested = true;
   msg.healthy = true;
+  msg.damping = b.damping;
   if (!b.forecast.first_problem.empty()) msg.warnings.push_back(b.forecast.first_problem);
+  if (b.damping < 1.0) {
+    msg.healthy = false;
+    msg.warnings.push_back("update damped to keep the parameter means in their prior support");
+  }
+  if (config_.health.predictive_check) {
+    const ParameterMapping& map = propagator_->mapping();
+    const PredictiveCheck p = posteriorPredictiveCheck(
+        propagator_->model(), map.fullParameters(b.mean), batch_series_, makeNoiseModel(config_),
+        config_.integration, map.count(), config_.health.nis_confidence);
+    msg.predictive_available = p.available;
+    msg.predictive_statistic = p.statistic;
+    msg.predictive_dof = static_cast<std::uint32_t>(std::max(0, p.dof));
+    msg.predictive_lower = p.lower;
+    msg.predictive_upper = p.upper;
+    msg.predictive_outside = p.outside;
+    if (p.outside) {
+      msg.healthy = false;
+      msg.warnings.push_back(p.warning(propagator_->model().channelNames(), batch_series_));
+    }
+    if (p.available) {
+      s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper
+        << "]" << (p.outside ? " FAILED" : "");
+    }
+  }
+  s << (msg.healthy ? "; healthy" : "; NOT healthy");
   s.precision(9);
   for (std::size_t i = 0; i < msg.names.size(); ++i) {
     s << (i ? ", " : ": ") << msg.names[i] << " " << msg.mean[i] << " +- " << msg.stddev[i];

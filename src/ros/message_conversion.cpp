@@ -285,6 +285,10 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
   }
   setCoefficients(msg, result.coefficients);
   setHealth(msg, result.health, result.update.channels, health_settings);
+  msg.gated = result.gated;
+  msg.rejected_samples = static_cast<std::uint32_t>(std::max(0, result.rejected));
+  msg.damping = result.damping;
+  msg.reopened = result.reopened;
   const int unusable = result.forecast.invalid_points + result.forecast.nonfinite_points;
   if (unusable > 0) {  // SPEC §3.2: reported, not fatal while enough points remain
     msg.warnings.push_back("forecast: " + std::to_string(unusable) + " of " +

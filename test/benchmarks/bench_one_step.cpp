@@ -134,7 +134,10 @@ void BM_PieceUpdate(benchmark::State& state) {
   s.propagator->forecast(prior, 0.0, 0.1);
   const Eigen::MatrixXd z_coeffs = s.model->observationMatrix() * prior.topRows(8);
   const Eigen::VectorXd z = z_coeffs.col(0) * 1.01;
-  const Eigen::VectorXd r = NoiseModel{}.variances(z);
+  Measurement m;
+  m.channels = {0, 1, 2, 3};
+  m.values = z;
+  const Eigen::VectorXd r = NoiseModel{}.variances(m);
   Eigen::MatrixXd x = prior;
   for (auto _ : state) {
     x = prior;

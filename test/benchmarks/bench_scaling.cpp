@@ -89,7 +89,7 @@ void BM_WholeSet(benchmark::State& state) {
       record = std::min(record, threadCpuSeconds() - c0);
       // (c) the Kalman update of the parameter coefficients with 4N observations.
       Eigen::MatrixXd updated = theta;
-      const Eigen::VectorXd rv = noise.variances(obs.z);
+      const Eigen::VectorXd rv = noise.stackedVariances(s.series);
       c0 = threadCpuSeconds();
       const UpdateDiagnostics d = pcKalmanUpdate(updated, obs.z_coeffs, obs.z, rv, s.config.update);
       update = std::min(update, threadCpuSeconds() - c0);

@@ -101,7 +101,7 @@ void kalmanStep(const Eigen::MatrixXd& phi, const Measurement& m, const NoiseMod
   kf->cov = phi * kf->cov * phi.transpose();
   const Eigen::MatrixXd h = observationRows(m);
   const Eigen::MatrixXd s =
-      h * kf->cov * h.transpose() + Eigen::MatrixXd(noise.variances(m.values).asDiagonal());
+      h * kf->cov * h.transpose() + Eigen::MatrixXd(noise.variances(m).asDiagonal());
   const Eigen::MatrixXd k = kf->cov * h.transpose() * s.inverse();
   kf->mean += k * (m.values - h * kf->mean);
   kf->cov = (Eigen::MatrixXd::Identity(4, 4) - k * h) * kf->cov;
@@ -145,7 +145,7 @@ TEST(LinearGaussian, PaperRuleKeepsTheMeanUpdateWithJosephCovariance) {
     t = m.time;
     const Eigen::MatrixXd cov = pcCovariance(x);
     const Eigen::MatrixXd h = observationRows(m);
-    const Eigen::MatrixXd r = p.noise.variances(m.values).asDiagonal();
+    const Eigen::MatrixXd r = p.noise.variances(m).asDiagonal();
     const Eigen::MatrixXd k = cov * h.transpose() * (h * cov * h.transpose() + r).inverse();
     const Eigen::MatrixXd ikh = Eigen::MatrixXd::Identity(4, 4) - k * h;
     const Eigen::VectorXd mean = x.col(0) + k * (m.values - h * x.col(0));

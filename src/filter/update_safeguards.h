@@ -1,0 +1,51 @@
+// What keeps the one-step and batch updates honest on data the model did not
+// generate: the physical-domain rule (damp an update whose parameter means
+// would leave the prior support), parameter drift (a random walk folded into
+// the PC coefficients) and re-opening the uncertainty after a persistent
+// health violation. See the README, "Trust on real data".
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+
+#include "pc/polynomial_basis.h"
+
+namespace pc_ekf {
+
+// ignore: the paper's behaviour (means may leave the support, flagged only by
+// the PDF-mass warning); damp: scale the whole update by the largest factor
+// in [0, 1] that keeps every parameter mean inside its support.
+enum class SupportRule { kIgnore, kDamp };
+std::string toString(SupportRule r);
+SupportRule supportRuleFromString(const std::string& s);  // throws std::invalid_argument
+
+enum class ReopenMode { kOff, kWidth, kPrior };
+std::string toString(ReopenMode m);
+ReopenMode reopenModeFromString(const std::string& s);  // throws std::invalid_argument
+
+struct ReopenSettings {
+  ReopenMode mode = ReopenMode::kOff;
+  double width = 0.5;  // kWidth: std after re-opening, as a fraction of the prior std
+  int after = 10;      // consecutive samples with the windowed NIS outside its bounds
+};
+
+// Largest gamma in [0, 1] such that before + gamma (after - before) keeps every
+// mean strictly inside [lower, upper] (a margin of 1e-3 of the width; an
+// infinite bound never binds). A mean already outside may only move inwards.
+double supportDamping(const Eigen::VectorXd& before, const Eigen::VectorXd& after,
+                      const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
+
+// Random walk theta_i(t + dt) = theta_i(t) + w, Var(w) = intensity_i^2 dt,
+// without new germs: the higher coefficients of parameter i are scaled so its
+// variance grows by intensity_i^2 dt (variance-matched inflation; correlations
+// with the other rows are kept). A parameter with zero variance gets the
+// increment on the degree-1 term of its own germ. `theta`: parameters x S.
+void applyDrift(Eigen::MatrixXd& theta, const Eigen::VectorXd& intensity, double dt,
+                const PolynomialBasis& basis);
+
+// Parameter rows re-opened: kPrior -> the prior coefficients; kWidth -> the
+// current mean with the prior's higher coefficients scaled by `width`.
+void reopenParameters(Eigen::MatrixXd& theta, const Eigen::MatrixXd& prior,
+                      const ReopenSettings& settings);
+
+}  // namespace pc_ekf
