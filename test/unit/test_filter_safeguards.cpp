@@ -1,0 +1,132 @@
+// The pieces that keep updates honest: sensor noise rule, support damping,
+// drift (variance growth), re-opening, and their configuration keys.
+#include <gtest/gtest.h>
+
+#include "filter/measurement.h"
+#include "filter/update_safeguards.h"
+#include "io/estimator_config.h"
+#include "pc/pc_statistics.h"
+
+namespace pc_ekf {
+namespace {
+
+TEST(SensorNoise, FloorPlusRelativePartNeverCollapses) {
+  NoiseModel n;
+  n.rule = NoiseRule::kSensor;
+  n.r_relative = 0.01;
+  n.channel_std = Eigen::Vector4d(1e-3, 2e-3, 1e-2, 2e-2);
+  Measurement m;
+  m.channels = {1, 3};
+  m.values = Eigen::Vector2d(0.0, 0.5);
+  const Eigen::VectorXd v = n.variances(m);
+  EXPECT_DOUBLE_EQ(v[0], 4e-6);                        // zero reading: the floor
+  EXPECT_DOUBLE_EQ(v[1], 4e-4 + 0.005 * 0.005);        // floor^2 + (rho z)^2
+  NoiseModel paper(0.01, 1e-12);
+  EXPECT_DOUBLE_EQ(paper.variances(m)[0], 1e-12);      // the paper's rule collapses
+  const Eigen::VectorXd stacked = n.stackedVariances({m, m});
+  ASSERT_EQ(stacked.size(), 4);
+  EXPECT_DOUBLE_EQ(stacked[3], v[1]);
+}
+
+TEST(SupportDamping, LargestStepThatKeepsTheMeansInside) {
+  const Eigen::Vector2d lo(-1, -1), hi(1, 1);
+  EXPECT_DOUBLE_EQ(supportDamping(Eigen::Vector2d(0, 0), Eigen::Vector2d(0.5, -0.5), lo, hi), 1.0);
+  // 0 -> 2 would cross at 1 - 0.002 (margin 1e-3 of the width 2): gamma = 0.499.
+  EXPECT_NEAR(supportDamping(Eigen::Vector2d(0, 0), Eigen::Vector2d(2, 0.1), lo, hi), 0.499, 1e-12);
+  // The more binding parameter decides.
+  EXPECT_NEAR(supportDamping(Eigen::Vector2d(0, 0.5), Eigen::Vector2d(2, -4.5), lo, hi),
+              (-0.998 - 0.5) / -5.0, 1e-12);
+  // Infinite bounds never bind; a non-finite step is refused.
+  const Eigen::Vector2d inf = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  EXPECT_DOUBLE_EQ(supportDamping(Eigen::Vector2d(0, 0), Eigen::Vector2d(1e9, -1e9), -inf, inf), 1.0);
+  EXPECT_DOUBLE_EQ(supportDamping(Eigen::Vector2d(0, 0), Eigen::Vector2d(NAN, 0), lo, hi), 0.0);
+}
+
+TEST(Drift, VarianceGrowsByIntensitySquaredTimesDt) {
+  const GermSpec beta{GermFamily::kBeta, 2.0, 2.0};
+  const PolynomialBasis basis({beta, beta}, 3);
+  Eigen::MatrixXd theta = Eigen::MatrixXd::Zero(2, basis.size());
+  theta(0, 0) = 200.0;
+  theta(0, 1) = 3.0;
+  theta(0, 4) = 1.0;  // some higher-order content
+  theta(1, 0) = 0.7;  // no variance yet: gets a degree-1 term of its own germ
+  const double v0 = pcStddev(theta)[0] * pcStddev(theta)[0];
+  applyDrift(theta, Eigen::Vector2d(2.0, 0.1), 0.25, basis);
+  const Eigen::VectorXd sd = pcStddev(theta);
+  EXPECT_NEAR(sd[0] * sd[0], v0 + 4.0 * 0.25, 1e-12);
+  EXPECT_NEAR(sd[1] * sd[1], 0.01 * 0.25, 1e-15);
+  EXPECT_DOUBLE_EQ(theta(0, 0), 200.0);  // the mean does not move
+  EXPECT_NEAR(theta(0, 4) / theta(0, 1), 1.0 / 3.0, 1e-15);  // shape kept
+  int own = -1;
+  for (int j = 1; j < basis.size(); ++j) {
+    if (basis.multiIndices()[j] == std::vector<int>{0, 1}) own = j;
+  }
+  EXPECT_NEAR(theta(1, own), 0.05, 1e-15);
+}
+
+TEST(Reopen, WidthAroundTheMeanOrBackToThePrior) {
+  Eigen::MatrixXd prior(1, 3), theta(1, 3);
+  prior << 200.0, 40.0, 0.0;
+  theta << 230.0, 0.1, 0.01;
+  Eigen::MatrixXd w = theta;
+  reopenParameters(w, prior, {ReopenMode::kWidth, 0.5, 10});
+  EXPECT_DOUBLE_EQ(w(0, 0), 230.0);
+  EXPECT_DOUBLE_EQ(w(0, 1), 20.0);
+  EXPECT_DOUBLE_EQ(w(0, 2), 0.0);
+  Eigen::MatrixXd p = theta;
+  reopenParameters(p, prior, {ReopenMode::kPrior, 0.5, 10});
+  EXPECT_EQ(p, prior);
+}
+
+const std::string kUncertain =
+    "uncertain:\n"
+    "  - {name: added_mass, nominal: 200.0, relative_range: 0.5, germ: {family: beta, alpha: 2, beta: 2}}\n"
+    "  - {name: added_mass_position, nominal: 0.762, relative_range: 0.25, germ: {family: uniform}}\n";
+
+TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
+  const EstimatorConfig c = parseConfigString(kUncertain +
+      "measurement: {r_rule: sensor, sensor_std: [1e-3, 1e-3, 1e-2, 1e-2]}\n"
+      "filter: {support: ignore, drift: [2.0, 0.0], reopen: {mode: prior, after: 7}}\n"
+      "health: {innovation_gate: 1e-6, predictive_check: false}\n",
+      "t.yaml");
+  EXPECT_EQ(c.measurement.r_rule, NoiseRule::kSensor);
+  EXPECT_EQ(c.measurement.sensor_std.size(), 4u);
+  EXPECT_EQ(c.safeguards.support, SupportRule::kIgnore);
+  EXPECT_EQ(c.safeguards.drift, (std::vector<double>{2.0, 0.0}));
+  EXPECT_EQ(c.safeguards.reopen.mode, ReopenMode::kPrior);
+  EXPECT_EQ(c.safeguards.reopen.after, 7);
+  EXPECT_DOUBLE_EQ(c.health.innovation_gate, 1e-6);
+  EXPECT_FALSE(c.health.predictive_check);
+  // Defaults: the paper's rule, damping on, no drift, no re-opening, gate off.
+  const EstimatorConfig d = parseConfigString(kUncertain, "d.yaml");
+  EXPECT_EQ(d.measurement.r_rule, NoiseRule::kPaper);
+  EXPECT_EQ(d.safeguards.support, SupportRule::kDamp);
+  EXPECT_TRUE(d.safeguards.drift.empty());
+  EXPECT_EQ(d.safeguards.reopen.mode, ReopenMode::kOff);
+  EXPECT_EQ(d.health.innovation_gate, 0.0);
+  const std::pair<const char*, const char*> bad[] = {
+      {"measurement: {r_rule: sensor}", "measurement.sensor_std"},
+      {"measurement: {r_rule: sensor, sensor_std: [1e-3, 0, 1, 1]}", "measurement.sensor_std"},
+      {"measurement: {r_rule: datasheet}", "measurement.r_rule"},
+      {"filter: {support: clamp}", "filter.support"},
+      {"filter: {drift: [1.0]}", "filter.drift"},
+      {"filter: {reopen: {mode: sometimes}}", "filter.reopen.mode"},
+      {"health: {innovation_gate: 0.9}", "health.innovation_gate"},
+  };
+  for (const auto& [yaml, key] : bad) {
+    try {
+      parseConfigString(kUncertain + yaml, "bad.yaml");
+      ADD_FAILURE() << "accepted: " << yaml;
+    } catch (const ConfigError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
+  }
+}
+
+}  // namespace
+}  // namespace pc_ekf
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
