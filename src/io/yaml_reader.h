@@ -31,6 +31,9 @@ class YamlMapReader {
   void numberList(const std::string& key, std::vector<double>& value, std::size_t size_min,
                   std::size_t size_max);
   void textList(const std::string& key, std::vector<std::string>& value);
+  // A list of exactly `size` numbers in [min, max], or one such number for all.
+  void numberPerItem(const std::string& key, std::vector<double>& value, std::size_t size,
+                     double min, double max);
 
   // Throws for keys present but never read.
   void finish() const;
