@@ -268,14 +268,16 @@ void readNode(YamlMapReader r, NodeConfig& n) {
   r.finish();
 }
 
+// `key`[i], or `key`.name with `by_name` (values given physically).
 void checkGermPoint(const YamlMapReader& r, const std::string& key, const EstimatorConfig& c,
-                    const std::vector<double>& xi) {
+                    const std::vector<double>& xi, bool by_name = false) {
   for (std::size_t i = 0; i < xi.size(); ++i) {
     const GermFamily f = c.uncertain[i].germ.family;
     const bool bounded = f == GermFamily::kBeta || f == GermFamily::kUniform;
     if (!std::isfinite(xi[i]) || (bounded && std::abs(xi[i]) > 1.0) ||
         (f == GermFamily::kGamma && xi[i] < 0)) {
-      r.fail(key + "[" + std::to_string(i) + "]", std::to_string(xi[i]),
+      r.fail(by_name ? key + "." + c.uncertain[i].name : key + "[" + std::to_string(i) + "]",
+             (by_name ? "at xi = " : "") + std::to_string(xi[i]),
              "a point in the support of germ " + describe(c.uncertain[i].germ));
     }
   }
@@ -308,7 +310,7 @@ TruthChange readChange(YamlMapReader e, const EstimatorConfig& c, double previou
     ch.xi[i] = (value / u.nominal - 1.0) / u.relative_range;
   }
   v.finish();
-  checkGermPoint(e, e.has("xi") ? "xi" : "values (as xi)", c, ch.xi);
+  checkGermPoint(e, e.has("xi") ? "xi" : "values", c, ch.xi, !e.has("xi"));
   e.finish();
   return ch;
 }
@@ -320,8 +322,8 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
   checkGermPoint(t, "xi", c, c.truth.xi);
   t.unsignedInteger("seed", c.truth.seed);
 
-  const bool override_vehicle = t.has("vehicle");
   YamlMapReader v = t.map("vehicle");
+  const bool override_vehicle = !v.empty();
   for (const auto& u : c.uncertain) {
     if (v.has(u.name)) {
       throw ConfigError(c.source + ": key '" + v.keyPath(u.name) + "': " + u.name +

@@ -151,6 +151,7 @@ void YamlMapReader::numberPerItem(const std::string& key, std::vector<double>& v
     value.assign(size, v);
     return;
   }
+  if (n.IsSequence() && n.size() == 0) return;
   if (n.IsSequence() && n.size() != size) {
     fail(key, yamlValueText(n), "a list of " + std::to_string(size) + " numbers or one number");
   }
