@@ -125,6 +125,16 @@ Eigen::VectorXd truthXiAt(const EstimatorConfig& c, double t) {
   return Eigen::Map<const Eigen::VectorXd>(xi->data(), xi->size());
 }
 
+std::vector<double> syntheticSampleTimes(const EstimatorConfig& c) {
+  const std::vector<double> nominal = uniformSampleTimes(c.sampling.samples, c.sampling.duration);
+  const SampleTiming timing = drawSampleTiming(nominal, c.truth.timing);
+  std::vector<double> out;
+  for (std::size_t k = 0; k < nominal.size(); ++k) {
+    if (timing.kept[k]) out.push_back(timing.stamps[k]);
+  }
+  return out;
+}
+
 SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& model,
                                         std::uint64_t seed) {
   SyntheticDataSettings s;

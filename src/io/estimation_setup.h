@@ -47,6 +47,9 @@ std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
 Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model);
 // Germ point of the truth at time t (truth.xi, then truth.schedule).
 Eigen::VectorXd truthXiAt(const EstimatorConfig& c, double t);
+// Stamps of the synthetic samples (jittered, without the dropped ones): they do
+// not depend on the noise seed.
+std::vector<double> syntheticSampleTimes(const EstimatorConfig& c);
 // Settings synthesizeFromConfig passes to synthesizeMeasurements; `truth` is
 // truthModel(c, ...) (the schedule's parameter vectors are its).
 SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& truth,

@@ -10,6 +10,7 @@
 
 #include "filter/trajectory_simulation.h"
 #include "io/estimation_setup.h"
+#include "io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {
@@ -284,6 +285,23 @@ TEST(SyntheticTruth, StampErrorMovesStampsButNotTheReadings) {
     }
   }
   EXPECT_NEAR(std::sqrt(sum2 / 400.0), 0.002, 4.0 * 0.002 / std::sqrt(800.0));
+}
+
+TEST(SyntheticTruth, SampleTimesOfTheDataDoNotDependOnTheNoiseSeed) {
+  const Case s(bumpConfig("timing: {jitter: 0.01, drop_fraction: 0.3, seed: 2}", "", 50, 5.0));
+  const std::vector<double> times = syntheticSampleTimes(s.c);
+  EXPECT_LT(times.size(), 50u);
+  EXPECT_EQ(sampleTimes(s.data(1)), times);
+  EXPECT_EQ(sampleTimes(s.data(8)), times);
+  EXPECT_EQ(syntheticSampleTimes(bumpConfig("")), uniformSampleTimes(20, 3.0));
+}
+
+TEST(SyntheticTruth, NoSampleLeftIsRefusedByTheEstimation) {
+  const Case s(bumpConfig("timing: {drop_fraction: 0.999}", "", 3, 3.0));
+  const MeasurementSeries data = s.data();
+  ASSERT_TRUE(data.empty());
+  EXPECT_THROW(runOfflineEstimation(s.c, data, s.model, EstimationMethod::kOneStep, 1),
+               std::invalid_argument);
 }
 
 // ---------------------------------------------------------------- truth.schedule
