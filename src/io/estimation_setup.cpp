@@ -135,7 +135,7 @@ std::vector<double> syntheticSampleTimes(const EstimatorConfig& c) {
   return out;
 }
 
-SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& model,
+SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& truth,
                                         std::uint64_t seed) {
   SyntheticDataSettings s;
   s.times = uniformSampleTimes(c.sampling.samples, c.sampling.duration);
@@ -146,7 +146,7 @@ SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const Mechanic
   s.integration = c.integration;
   s.sensor = c.truth.sensor;
   s.timing = c.truth.timing;
-  for (const auto& ch : c.truth.schedule) s.schedule.push_back({ch.time, fullAt(c, model, ch.xi)});
+  for (const auto& ch : c.truth.schedule) s.schedule.push_back({ch.time, fullAt(c, truth, ch.xi)});
   return s;
 }
 
