@@ -1,5 +1,6 @@
 #include "filter/synthetic_data.h"
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -8,28 +9,117 @@
 
 namespace pc_ekf {
 
+namespace {
+
+double channelValue(const std::vector<double>& list, int channel, double fallback) {
+  return list.empty() ? fallback : list.at(channel);
+}
+
+}  // namespace
+
+std::vector<Eigen::MatrixXd> simulateScheduled(const MechanicalModel& model,
+                                               const Eigen::VectorXd& params,
+                                               const std::vector<ParameterChange>& schedule,
+                                               const std::vector<double>& times,
+                                               const IntegratorSettings& settings) {
+  // Without changes: exactly the common kernel, so the data stay bit-identical.
+  if (schedule.empty()) return simulateChannels(model, params, times, settings);
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    if (times[k] < (k == 0 ? 0.0 : times[k - 1])) {
+      throw std::invalid_argument("simulateScheduled: sample times must be >= 0 and not decrease");
+    }
+  }
+  std::vector<Eigen::MatrixXd> out;
+  out.reserve(times.size());
+  auto batch = model.prepare(params);
+  Eigen::ArrayXXd y = batch->initialState();
+  double t = 0.0;
+  std::size_t next = 0;
+  for (double tk : times) {
+    while (next < schedule.size() && schedule[next].time <= tk) {
+      const double tc = std::max(t, schedule[next].time);
+      integrate(model, *batch, t, tc, y, settings);
+      t = tc;
+      batch = model.prepare(schedule[next].params);  // y carried over unchanged
+      ++next;
+    }
+    integrate(model, *batch, t, tk, y, settings);
+    t = tk;
+    out.push_back(model.observationMatrix() * y.matrix());
+  }
+  return out;
+}
+
+SampleTiming drawSampleTiming(const std::vector<double>& times, const TimingImperfections& p) {
+  SampleTiming s{times, times, std::vector<bool>(times.size(), true)};
+  if (!p.active()) return s;
+  // One generator per feature: turning one on leaves the others' draws alone.
+  // (seed_seq keeps 32 bits per value, hence the split.)
+  const auto lo = static_cast<std::uint32_t>(p.seed), hi = static_cast<std::uint32_t>(p.seed >> 32);
+  std::seed_seq jitter_seed{lo, hi, 1u}, stamp_seed{lo, hi, 2u}, drop_seed{lo, hi, 3u};
+  std::mt19937_64 jitter_rng(jitter_seed), stamp_rng(stamp_seed), drop_rng(drop_seed);
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    double gap = times[k] - (k == 0 ? 0.0 : times[k - 1]);
+    if (k + 1 < times.size()) gap = std::min(gap, times[k + 1] - times[k]);
+    const double limit = 0.45 * std::max(gap, 0.0);
+    double offset = 0.0;
+    if (p.jitter > 0.0) offset = std::clamp(p.jitter * normal(jitter_rng), -limit, limit);
+    s.instants[k] = times[k] + offset;
+    if (p.stamp_error > 0.0) {
+      offset = std::clamp(offset + p.stamp_error * normal(stamp_rng), -limit, limit);
+    }
+    s.stamps[k] = times[k] + offset;
+    if (p.drop_fraction > 0.0) s.kept[k] = uniform(drop_rng) >= p.drop_fraction;
+  }
+  return s;
+}
+
 MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
                                          const Eigen::VectorXd& truth_params,
                                          const SyntheticDataSettings& s,
                                          MeasurementSeries* clean) {
-  const std::string why = model.invalidReason(truth_params);
+  std::string why = model.invalidReason(truth_params);
   if (!why.empty()) throw std::invalid_argument("truth parameters invalid: " + why);
-  const auto channels = simulateChannels(model, truth_params, s.times, s.integration);
+  for (const auto& change : s.schedule) {
+    why = model.invalidReason(change.params);
+    if (!why.empty()) {
+      throw std::invalid_argument("truth parameters from t = " + std::to_string(change.time) +
+                                  " invalid: " + why);
+    }
+  }
+  const std::size_t nc = static_cast<std::size_t>(model.observationMatrix().rows());
+  for (const auto* list : {&s.sensor.noise_floor, &s.sensor.bias, &s.sensor.quantisation}) {
+    if (!list->empty() && list->size() != nc) {
+      throw std::invalid_argument("sensor imperfections: one value per model channel expected");
+    }
+  }
+  const SampleTiming timing = drawSampleTiming(s.times, s.timing);
+  const auto channels =
+      simulateScheduled(model, truth_params, s.schedule, timing.instants, s.integration);
   std::mt19937_64 rng(s.seed);
   std::normal_distribution<double> normal;
   MeasurementSeries out;
   if (clean) clean->clear();
   for (std::size_t k = 0; k < s.times.size(); ++k) {
+    if (!timing.kept[k]) continue;
     Measurement m;
-    m.time = s.times[k];
+    m.time = timing.stamps[k];
     m.channels = s.channels;
     m.values.resize(s.channels.size());
     Measurement exact = m;
     for (std::size_t c = 0; c < s.channels.size(); ++c) {
-      const double z = channels[k](s.channels[c], 0);
-      const double sd = std::hypot(s.noise_relative * z, s.noise_floor);
+      const int ch = s.channels[c];
+      const double z = channels[k](ch, 0);
+      const double floor = channelValue(s.sensor.noise_floor, ch, s.noise_floor);
+      const double sd = std::hypot(s.noise_relative * z, floor);
       exact.values[c] = z;
-      m.values[c] = z + sd * normal(rng);
+      double v = z + sd * normal(rng);
+      if (!s.sensor.bias.empty()) v += s.sensor.bias[ch];
+      const double step = channelValue(s.sensor.quantisation, ch, 0.0);
+      if (step > 0.0) v = step * std::round(v / step);
+      m.values[c] = v;
     }
     out.push_back(m);
     if (clean) clean->push_back(exact);

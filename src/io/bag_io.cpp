@@ -275,9 +275,17 @@ void writeBag(const std::string& path, const BagContents& c) {
     if (c.ground_truth) {
       bag.write(c.ground_truth_topic, c.ground_truth->header.stamp, *c.ground_truth);
     }
+    std::size_t g = 0;
+    const auto truthsUpTo = [&](const ros::Time& stamp) {
+      for (; g < c.ground_truth_series.size() && c.ground_truth_series[g].header.stamp <= stamp; ++g) {
+        const auto& m = c.ground_truth_series[g];
+        bag.write(c.ground_truth_topic, m.header.stamp, m);
+      }
+    };
     while (r < c.road.t.size() || s < c.samples.size()) {
       const bool road_next =
           s >= c.samples.size() || (r < c.road.t.size() && c.road.t[r] <= c.samples[s].time);
+      truthsUpTo(stampAt(c.origin, road_next ? c.road.t[r] : c.samples[s].time));
       if (road_next) {
         const ros::Time stamp = stampAt(c.origin, c.road.t[r]);
         bag.write(c.road_topic, stamp, roadProfileMessage(stamp, c.road.left[r], c.road.right[r]));
@@ -289,6 +297,7 @@ void writeBag(const std::string& path, const BagContents& c) {
         ++s;
       }
     }
+    truthsUpTo(ros::TIME_MAX);
     bag.close();
   } catch (const BagError&) {
     throw;

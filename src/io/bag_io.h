@@ -71,6 +71,9 @@ struct BagContents {
   RoadSeries road;
   MeasurementSeries samples;
   std::optional<ParameterEstimate> ground_truth;  // written at its header stamp
+  // Further ground truths (a truth that changes), stamps not decreasing; each
+  // is written before the road and samples of later stamps.
+  std::vector<ParameterEstimate> ground_truth_series;
   SuspensionJoints joints;
   std::string road_topic = kRoadTopic;  // full topic names as written
   std::string joint_states_topic = kJointStatesTopic;

@@ -20,6 +20,7 @@ std::shared_ptr<const RoadInput> makeRoad(const EstimatorConfig& c,
         throw ConfigError(c.source + ": key 'road.series.file': " + e.what());
       }
     }
+    case RoadSource::kCourse: return std::make_shared<CourseRoad>(c.road.course);
     case RoadSource::kTopic: break;
   }
   throw std::invalid_argument(c.source + ": road.source is topic but no road samples were given");
@@ -101,14 +102,51 @@ std::vector<int> channelIndices(const EstimatorConfig& c) {
   return idx;
 }
 
-Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model) {
-  const ParameterMapping mapping(model, c.uncertain);
-  const Eigen::VectorXd xi = Eigen::Map<const Eigen::VectorXd>(c.truth.xi.data(), c.truth.xi.size());
+std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
+                                                  const MechanicalModel& model) {
+  // Non-owning: the estimator's model is the caller's.
+  if (!c.truth.vehicle) return std::shared_ptr<const MechanicalModel>(std::shared_ptr<void>(), &model);
+  const auto* roll = dynamic_cast<const RollPlaneModel*>(&model);
+  if (!roll) throw ConfigError(c.source + ": key 'truth.vehicle': the model is no vehicle model");
+  const std::shared_ptr<const RoadInput> road(std::shared_ptr<void>(), &roll->road());
+  return std::make_shared<RollPlaneModel>(*c.truth.vehicle, road);
+}
+
+namespace {
+
+Eigen::VectorXd fullAt(const EstimatorConfig& c, const MechanicalModel& truth,
+                       const std::vector<double>& xi_list) {
+  const ParameterMapping mapping(truth, c.uncertain);
+  const Eigen::VectorXd xi = Eigen::Map<const Eigen::VectorXd>(xi_list.data(), xi_list.size());
   return mapping.fullParameters(c.parameterValues(xi));
 }
 
-MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
-                                       std::uint64_t seed) {
+}  // namespace
+
+Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model) {
+  return fullAt(c, *truthModel(c, model), c.truth.xi);
+}
+
+Eigen::VectorXd truthXiAt(const EstimatorConfig& c, double t) {
+  const std::vector<double>* xi = &c.truth.xi;
+  for (const auto& ch : c.truth.schedule) {
+    if (ch.time <= t) xi = &ch.xi;
+  }
+  return Eigen::Map<const Eigen::VectorXd>(xi->data(), xi->size());
+}
+
+std::vector<double> syntheticSampleTimes(const EstimatorConfig& c) {
+  const std::vector<double> nominal = uniformSampleTimes(c.sampling.samples, c.sampling.duration);
+  const SampleTiming timing = drawSampleTiming(nominal, c.truth.timing);
+  std::vector<double> out;
+  for (std::size_t k = 0; k < nominal.size(); ++k) {
+    if (timing.kept[k]) out.push_back(timing.stamps[k]);
+  }
+  return out;
+}
+
+SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& truth,
+                                        std::uint64_t seed) {
   SyntheticDataSettings s;
   s.times = uniformSampleTimes(c.sampling.samples, c.sampling.duration);
   s.channels = channelIndices(c);
@@ -116,7 +154,17 @@ MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const Mechanica
   s.noise_floor = c.measurement.noise_floor;
   s.seed = seed;
   s.integration = c.integration;
-  return synthesizeMeasurements(model, truthParameters(c, model), s);
+  s.sensor = c.truth.sensor;
+  s.timing = c.truth.timing;
+  for (const auto& ch : c.truth.schedule) s.schedule.push_back({ch.time, fullAt(c, truth, ch.xi)});
+  return s;
+}
+
+MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
+                                       std::uint64_t seed) {
+  const auto truth = truthModel(c, model);
+  return synthesizeMeasurements(*truth, fullAt(c, *truth, c.truth.xi),
+                                syntheticSettings(c, *truth, seed));
 }
 
 RoadSeries sampleRoad(const RoadInput& road, double t_end, double rate) {

@@ -33,10 +33,27 @@ NoiseModel makeNoiseModel(const EstimatorConfig& c);
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c);
 std::vector<int> channelIndices(const EstimatorConfig& c);
 
-// Synthetic data of the config (truth xi, sampling, noise) with `seed`.
+// Synthetic data of the config (truth section, sampling, noise) with `seed`.
+// `model` is the estimator's; truth.vehicle gives the truth its own model on
+// the same road.
 MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
                                        std::uint64_t seed);
+// The model the truth is simulated with: `model` itself, or a RollPlaneModel
+// of truth.vehicle on model's road (which must outlive the result). Throws
+// ConfigError when truth.vehicle is given for a model that is no RollPlaneModel.
+std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
+                                                  const MechanicalModel& model);
+// Full parameter vector of the truth model at t = 0 (truth.xi).
 Eigen::VectorXd truthParameters(const EstimatorConfig& c, const MechanicalModel& model);
+// Germ point of the truth at time t (truth.xi, then truth.schedule).
+Eigen::VectorXd truthXiAt(const EstimatorConfig& c, double t);
+// Stamps of the synthetic samples (jittered, without the dropped ones): they do
+// not depend on the noise seed.
+std::vector<double> syntheticSampleTimes(const EstimatorConfig& c);
+// Settings synthesizeFromConfig passes to synthesizeMeasurements; `truth` is
+// truthModel(c, ...) (the schedule's parameter vectors are its).
+SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& truth,
+                                        std::uint64_t seed);
 
 // `road` sampled at `rate` Hz from t = 0 until the first time >= t_end: the
 // road/profile stream a bag or a live vehicle would carry.

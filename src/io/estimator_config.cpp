@@ -91,18 +91,7 @@ std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const Vehicle
   return out;
 }
 
-RoadConfig readRoad(YamlMapReader r) {
-  RoadConfig road;
-  std::string source = toString(road.source);
-  r.text("source", source);
-  if (source == "speed_bump") road.source = RoadSource::kSpeedBump;
-  else if (source == "sine") road.source = RoadSource::kSine;
-  else if (source == "series") road.source = RoadSource::kSeries;
-  else if (source == "topic") road.source = RoadSource::kTopic;
-  else r.fail("source", "'" + source + "'", "speed_bump, sine, series or topic");
-
-  YamlMapReader b = r.map("speed_bump");
-  SpeedBumpSettings& s = road.speed_bump;
+void readSpeedBump(YamlMapReader& b, SpeedBumpSettings& s) {
   b.number("speed_kmh", s.speed_kmh, 0.0, kInf, true);
   b.number("height_left", s.height_left, -kInf, kInf);
   b.number("height_right", s.height_right, -kInf, kInf);
@@ -111,12 +100,60 @@ RoadConfig readRoad(YamlMapReader r) {
   b.number("ramp_down_length", s.ramp_down_length, 0.0, kInf, true);
   b.number("delay_fraction", s.delay_fraction, 0.0, kInf);
   b.number("start_distance", s.start_distance, 0.0, kInf);
+}
+
+void readSine(YamlMapReader& n, SineSettings& s) {
+  n.number("amplitude", s.amplitude, -kInf, kInf);
+  n.number("frequency", s.frequency, 0.0, kInf, true);
+  n.number("right_sign", s.right_sign, -1.0, 1.0);
+}
+
+// Segments default to the road.speed_bump / road.sine settings.
+std::vector<CourseSegment> readCourse(YamlMapReader& r, const RoadConfig& road) {
+  std::vector<CourseSegment> out;
+  const YAML::Node seq = r.sequence("course");
+  if (!seq.IsDefined() || seq.IsNull()) return out;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    YamlMapReader e(seq[i], r.keyPath("course[" + std::to_string(i) + "]"), r.source());
+    CourseSegment seg;
+    std::string type;
+    e.text("type", type);
+    if (type == "speed_bump") {
+      seg.type = CourseSegment::Type::kSpeedBump;
+      seg.speed_bump = road.speed_bump;
+      readSpeedBump(e, seg.speed_bump);
+    } else if (type == "sine" || type == "rest") {
+      seg.type = type == "sine" ? CourseSegment::Type::kSine : CourseSegment::Type::kRest;
+      seg.sine = road.sine;
+      if (type == "sine") readSine(e, seg.sine);
+      if (!e.has("duration")) e.fail("duration", "(empty)", "a positive duration in s");
+      e.number("duration", seg.duration, 0.0, kInf, true);
+    } else {
+      e.fail("type", "'" + type + "'", "speed_bump, sine or rest");
+    }
+    e.finish();
+    out.push_back(seg);
+  }
+  return out;
+}
+
+RoadConfig readRoad(YamlMapReader r) {
+  RoadConfig road;
+  std::string source = toString(road.source);
+  r.text("source", source);
+  if (source == "speed_bump") road.source = RoadSource::kSpeedBump;
+  else if (source == "sine") road.source = RoadSource::kSine;
+  else if (source == "series") road.source = RoadSource::kSeries;
+  else if (source == "topic") road.source = RoadSource::kTopic;
+  else if (source == "course") road.source = RoadSource::kCourse;
+  else r.fail("source", "'" + source + "'", "speed_bump, sine, series, topic or course");
+
+  YamlMapReader b = r.map("speed_bump");
+  readSpeedBump(b, road.speed_bump);
   b.finish();
 
   YamlMapReader n = r.map("sine");
-  n.number("amplitude", road.sine.amplitude, -kInf, kInf);
-  n.number("frequency", road.sine.frequency, 0.0, kInf, true);
-  n.number("right_sign", road.sine.right_sign, -1.0, 1.0);
+  readSine(n, road.sine);
   n.finish();
 
   YamlMapReader f = r.map("series");
@@ -124,6 +161,10 @@ RoadConfig readRoad(YamlMapReader r) {
   f.finish();
   if (road.source == RoadSource::kSeries && road.series_file.empty()) {
     f.fail("file", "(empty)", "a road CSV path (t,y1,y2) when road.source is series");
+  }
+  road.course = readCourse(r, road);
+  if (road.source == RoadSource::kCourse && road.course.empty()) {
+    r.fail("course", "(empty)", "a list of segments when road.source is course");
   }
   r.finish();
   return road;
@@ -263,6 +304,104 @@ void readNode(YamlMapReader r, NodeConfig& n) {
   r.finish();
 }
 
+// `key`[i], or `key`.name with `by_name` (values given physically).
+void checkGermPoint(const YamlMapReader& r, const std::string& key, const EstimatorConfig& c,
+                    const std::vector<double>& xi, bool by_name = false) {
+  for (std::size_t i = 0; i < xi.size(); ++i) {
+    const GermFamily f = c.uncertain[i].germ.family;
+    const bool bounded = f == GermFamily::kBeta || f == GermFamily::kUniform;
+    if (!std::isfinite(xi[i]) || (bounded && std::abs(xi[i]) > 1.0) ||
+        (f == GermFamily::kGamma && xi[i] < 0)) {
+      r.fail(by_name ? key + "." + c.uncertain[i].name : key + "[" + std::to_string(i) + "]",
+             (by_name ? "at xi = " : "") + std::to_string(xi[i]),
+             "a point in the support of germ " + describe(c.uncertain[i].germ));
+    }
+  }
+}
+
+// One change of truth.schedule: `xi` (all germs) or `values` (physical values
+// of some uncertain parameters, the others as before).
+TruthChange readChange(YamlMapReader e, const EstimatorConfig& c, double previous_time,
+                       const std::vector<double>& previous_xi) {
+  TruthChange ch;
+  if (!e.has("time")) e.fail("time", "(empty)", "a time in s");
+  e.number("time", ch.time, 0.0, kInf, true);
+  if (ch.time <= previous_time) {
+    e.fail("time", std::to_string(ch.time),
+           "a time after the previous change's " + std::to_string(previous_time) +
+               " (times increasing)");
+  }
+  const std::size_t n = c.uncertain.size();
+  if (e.has("xi") == e.has("values")) {
+    e.fail("xi", e.has("xi") ? "given with values" : "(empty)", "either xi or values");
+  }
+  ch.xi = previous_xi;
+  e.numberList("xi", ch.xi, n, n);
+  YamlMapReader v = e.map("values");
+  for (std::size_t i = 0; i < n; ++i) {
+    const UncertainParameter& u = c.uncertain[i];
+    if (!v.has(u.name)) continue;
+    double value = 0.0;
+    v.number(u.name, value, -kInf, kInf);
+    ch.xi[i] = (value / u.nominal - 1.0) / u.relative_range;
+  }
+  v.finish();
+  checkGermPoint(e, e.has("xi") ? "xi" : "values", c, ch.xi, !e.has("xi"));
+  e.finish();
+  return ch;
+}
+
+void readTruth(YamlMapReader t, EstimatorConfig& c) {
+  const int n = static_cast<int>(c.uncertain.size());
+  c.truth.xi.assign(n, 0.0);
+  t.numberList("xi", c.truth.xi, n, n);
+  checkGermPoint(t, "xi", c, c.truth.xi);
+  t.unsignedInteger("seed", c.truth.seed);
+
+  YamlMapReader v = t.map("vehicle");
+  const bool override_vehicle = !v.empty();
+  for (const auto& u : c.uncertain) {
+    if (v.has(u.name)) {
+      throw ConfigError(c.source + ": key '" + v.keyPath(u.name) + "': " + u.name +
+                        " is uncertain; its truth comes from truth.xi (and truth.schedule), "
+                        "not truth.vehicle");
+    }
+  }
+  if (override_vehicle) {
+    VehicleParameters p = c.vehicle;
+    readVehicle(v, p);
+    c.truth.vehicle = p;
+  }
+
+  constexpr std::size_t kChannels = 4;  // u1, u2, v1, v2
+  YamlMapReader s = t.map("sensor");
+  s.numberPerItem("noise_floor", c.truth.sensor.noise_floor, kChannels, 0.0, kInf);
+  s.numberPerItem("bias", c.truth.sensor.bias, kChannels, -kInf, kInf);
+  s.numberPerItem("quantisation", c.truth.sensor.quantisation, kChannels, 0.0, kInf);
+  s.finish();
+
+  YamlMapReader g = t.map("timing");
+  g.number("jitter", c.truth.timing.jitter, 0.0, kInf);
+  g.number("stamp_error", c.truth.timing.stamp_error, 0.0, kInf);
+  g.number("drop_fraction", c.truth.timing.drop_fraction, 0.0, 1.0);
+  if (c.truth.timing.drop_fraction >= 1.0) {
+    g.fail("drop_fraction", "1", "a probability in [0, 1)");
+  }
+  g.unsignedInteger("seed", c.truth.timing.seed);
+  g.finish();
+
+  const YAML::Node seq = t.sequence("schedule");
+  for (std::size_t i = 0; seq.IsDefined() && !seq.IsNull() && i < seq.size(); ++i) {
+    const bool first = c.truth.schedule.empty();
+    c.truth.schedule.push_back(
+        readChange(YamlMapReader(seq[i], t.keyPath("schedule[" + std::to_string(i) + "]"),
+                                 t.source()),
+                   c, first ? 0.0 : c.truth.schedule.back().time,
+                   first ? c.truth.xi : c.truth.schedule.back().xi));
+  }
+  t.finish();
+}
+
 }  // namespace
 
 std::string toString(BatchMethod m) { return m == BatchMethod::kWholeSet ? "whole_set" : "es_mda"; }
@@ -273,6 +412,7 @@ std::string toString(RoadSource s) {
     case RoadSource::kSine: return "sine";
     case RoadSource::kSeries: return "series";
     case RoadSource::kTopic: return "topic";
+    case RoadSource::kCourse: return "course";
   }
   return "?";
 }
@@ -363,19 +503,7 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   }
   m.finish();
 
-  YamlMapReader t = root.map("truth");
-  c.truth.xi.assign(n, 0.0);
-  t.numberList("xi", c.truth.xi, n, n);
-  for (int i = 0; i < n; ++i) {
-    const GermFamily f = c.uncertain[i].germ.family;
-    const bool bounded = f == GermFamily::kBeta || f == GermFamily::kUniform;
-    if ((bounded && std::abs(c.truth.xi[i]) > 1.0) || (f == GermFamily::kGamma && c.truth.xi[i] < 0)) {
-      t.fail("xi[" + std::to_string(i) + "]", std::to_string(c.truth.xi[i]),
-             "a point in the support of germ " + describe(c.uncertain[i].germ));
-    }
-  }
-  t.unsignedInteger("seed", c.truth.seed);
-  t.finish();
+  readTruth(root.map("truth"), c);
 
   YamlMapReader integ = root.map("integration");
   integ.number("max_step", c.integration.max_step, 0.0, 1.0, true);

@@ -5,12 +5,14 @@
 
 #include <Eigen/Dense>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "filter/kalman_update.h"
 #include "filter/measurement.h"
+#include "filter/synthetic_data.h"
 #include "filter/uncertain_parameters.h"
 #include "filter/update_safeguards.h"
 #include "model/integrator.h"
@@ -32,7 +34,7 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class RoadSource { kSpeedBump, kSine, kSeries, kTopic };
+enum class RoadSource { kSpeedBump, kSine, kSeries, kTopic, kCourse };
 std::string toString(RoadSource s);
 
 struct RoadConfig {
@@ -40,6 +42,7 @@ struct RoadConfig {
   SpeedBumpSettings speed_bump;
   SineSettings sine;
   std::string series_file;  // road CSV t,y1,y2 (source: series)
+  std::vector<CourseSegment> course;  // source: course
 };
 
 // Samples at t_k = k * duration / samples, k = 1..samples (SPEC §1.6).
@@ -61,9 +64,21 @@ struct MeasurementConfig {
   std::vector<double> sensor_std;  // sensor rule: absolute std per channel u1, u2, v1, v2
 };
 
+// From `time` on the truth is at germ point `xi` (synthetic data).
+struct TruthChange {
+  double time = 0.0;
+  std::vector<double> xi;
+};
+
 struct TruthConfig {
   std::vector<double> xi;  // germ coordinates of the truth, one per uncertain parameter
   std::uint64_t seed = 1;  // measurement-noise seed
+  // `vehicle` with truth.vehicle's keys applied, resolved when parsed; unset:
+  // the truth uses `vehicle`.
+  std::optional<VehicleParameters> vehicle;
+  SensorImperfections sensor;  // per model channel u1, u2, v1, v2
+  TimingImperfections timing;
+  std::vector<TruthChange> schedule;  // times increasing, > 0
 };
 
 struct CollocationConfig {

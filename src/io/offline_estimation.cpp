@@ -223,6 +223,8 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
                                    EstimationMethod method, std::uint64_t seed,
                                    const ProgressCallback& progress,
                                    const CoarseGridCache* grid_cache) {
+  // Possible with synthetic data whose truth.timing.drop_fraction lost every sample.
+  if (series.empty()) throw std::invalid_argument(c.source + ": no samples to estimate from");
   const auto start = std::chrono::steady_clock::now();
   OfflineResult r;
   r.method = toString(method);

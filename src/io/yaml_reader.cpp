@@ -140,6 +140,31 @@ void YamlMapReader::numberList(const std::string& key, std::vector<double>& valu
   value = out;
 }
 
+void YamlMapReader::numberPerItem(const std::string& key, std::vector<double>& value,
+                                  std::size_t size, double min, double max) {
+  read_.insert(key);
+  if (!has(key)) return;
+  const YAML::Node n = node_[key];
+  if (n.IsScalar()) {
+    double v = 0.0;
+    number(key, v, min, max);
+    value.assign(size, v);
+    return;
+  }
+  if (n.IsSequence() && n.size() == 0) return;
+  if (n.IsSequence() && n.size() != size) {
+    fail(key, yamlValueText(n), "a list of " + std::to_string(size) + " numbers or one number");
+  }
+  std::vector<double> out;
+  numberList(key, out, size, size);
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    if (!(out[i] >= min && out[i] <= max)) {
+      fail(key + "[" + std::to_string(i) + "]", std::to_string(out[i]), rangeText(min, max, false));
+    }
+  }
+  value = out;
+}
+
 void YamlMapReader::textList(const std::string& key, std::vector<std::string>& value) {
   const YAML::Node seq = sequence(key);
   if (!seq.IsDefined() || seq.IsNull()) return;

@@ -19,6 +19,7 @@ class YamlMapReader {
   YamlMapReader(const YAML::Node& node, std::string path, std::string source);
 
   bool has(const std::string& key) const;
+  bool empty() const { return !node_.IsMap() || node_.size() == 0; }
   YamlMapReader map(const std::string& key);  // absent -> empty map
   YAML::Node sequence(const std::string& key);  // absent -> null node
 
@@ -31,6 +32,10 @@ class YamlMapReader {
   void numberList(const std::string& key, std::vector<double>& value, std::size_t size_min,
                   std::size_t size_max);
   void textList(const std::string& key, std::vector<std::string>& value);
+  // A list of exactly `size` numbers in [min, max], or one such number for
+  // all; an empty list leaves `value` as it is.
+  void numberPerItem(const std::string& key, std::vector<double>& value, std::size_t size,
+                     double min, double max);
 
   // Throws for keys present but never read.
   void finish() const;

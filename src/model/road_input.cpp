@@ -82,6 +82,60 @@ Eigen::Vector2d SineRoad::height(double t) const {
   return {y1, s_.right_sign * y1};
 }
 
+double CourseRoad::speedBumpDuration(const SpeedBumpSettings& s) {
+  const SpeedBumpRoad bump(s);
+  const double total = s.ramp_up_length + s.flat_length + s.ramp_down_length;
+  const double end = (s.start_distance + (1.0 + s.delay_fraction) * total) / (s.speed_kmh / 3.6);
+  const auto corners = bump.breakpoints(-1.0, 2.0 * end + 1.0);
+  // The last corner itself, so the boundary coincides with it bit for bit.
+  return corners.empty() ? end : corners.back();
+}
+
+CourseRoad::CourseRoad(std::vector<CourseSegment> segments) {
+  if (segments.empty()) throw std::invalid_argument("CourseRoad: no segments");
+  start_.push_back(0.0);
+  for (const auto& seg : segments) {
+    double d = seg.duration;
+    if (seg.type == CourseSegment::Type::kSpeedBump) {
+      roads_.push_back(std::make_unique<SpeedBumpRoad>(seg.speed_bump));
+      d = speedBumpDuration(seg.speed_bump);
+    } else if (seg.type == CourseSegment::Type::kSine) {
+      roads_.push_back(std::make_unique<SineRoad>(seg.sine));
+    } else {
+      roads_.push_back(nullptr);
+    }
+    if (!(d > 0.0) || !std::isfinite(d)) {
+      throw std::invalid_argument("CourseRoad: segment duration must be finite and > 0");
+    }
+    start_.push_back(start_.back() + d);
+  }
+}
+
+Eigen::Vector2d CourseRoad::height(double t) const {
+  if (t >= start_.back()) return Eigen::Vector2d::Zero();
+  const std::size_t i =
+      t < start_[1] ? 0 : std::upper_bound(start_.begin(), start_.end(), t) - start_.begin() - 1;
+  return roads_[i] ? roads_[i]->height(t - start_[i]) : Eigen::Vector2d::Zero();
+}
+
+std::vector<double> CourseRoad::breakpoints(double t0, double t1) const {
+  std::vector<double> out;
+  for (std::size_t i = 0; i < roads_.size(); ++i) {
+    const double a = start_[i], b = start_[i + 1];
+    if (b <= t0 || a >= t1 || !roads_[i]) continue;
+    for (double local : roads_[i]->breakpoints(t0 - a, t1 - a)) {
+      const double t = a + local;
+      if (t > t0 && t < t1) out.push_back(t);
+    }
+  }
+  for (double b : start_) {
+    if (b > t0 && b < t1) out.push_back(b);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 SampledRoad::SampledRoad(std::vector<double> t, std::vector<double> left,
                          std::vector<double> right) {
   if (t.size() != left.size() || t.size() != right.size()) {

@@ -53,6 +53,33 @@ class SineRoad : public RoadInput {
   SineSettings s_;
 };
 
+// One piece of a course road; durations in s.
+struct CourseSegment {
+  enum class Type { kSpeedBump, kSine, kRest };
+  Type type = Type::kRest;
+  SpeedBumpSettings speed_bump;
+  SineSettings sine;
+  double duration = 0.0;  // sine and rest; a speed bump lasts until both tyres are past it
+};
+
+// Segments played one after another, each in its own time from 0 (a sine
+// starts at phase 0); flat road after the last one. Segment boundaries are
+// breakpoints, so a step where a sine ends is integrated exactly.
+class CourseRoad : public RoadInput {
+ public:
+  // Throws std::invalid_argument for no segments, a bad bump or a duration <= 0.
+  explicit CourseRoad(std::vector<CourseSegment> segments);
+  Eigen::Vector2d height(double t) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+  // Start time of each segment and the course's end.
+  const std::vector<double>& boundaries() const { return start_; }
+  // Time for both tyres to be past the bump (its last corner).
+  static double speedBumpDuration(const SpeedBumpSettings& s);
+ private:
+  std::vector<std::unique_ptr<RoadInput>> roads_;  // null for rest
+  std::vector<double> start_;  // one per segment, then the course's end
+};
+
 // A sampled series, linearly interpolated; held constant outside its span.
 // Samples can be appended (road from a topic); times must increase strictly.
 class SampledRoad : public RoadInput {

@@ -86,7 +86,7 @@ int main(int argc, char** argv) {
       if (l != "grid") continue;
       cache = std::make_unique<CoarseGridCache>(
           *model, ParameterMapping(*model, config.uncertain),
-          uniformSampleTimes(config.sampling.samples, config.sampling.duration), config.integration,
+          syntheticSampleTimes(config), config.integration,
           config.grid.coarse_points, config.grid.threads);
     }
     for (std::uint64_t seed = first; seed <= last; ++seed) {

@@ -22,7 +22,8 @@ const char* kUsage =
     "                      [--road-rate HZ (1000)] [--start-time SEC (1000000000)]\n"
     "                      [--csv FILE.csv]\n"
     "Writes road/profile at HZ from t = 0 to the last sample, suspension/joint_states\n"
-    "at the config's sample times and ground_truth, stamped START + t.\n";
+    "at the config's sample times and ground_truth, stamped START + t (with a\n"
+    "truth.schedule also one ground_truth per sample, at its stamp).\n";
 
 // Parses a finite double; false when the whole text is not one.
 bool parseDouble(const std::string& text, double* value) {
@@ -87,9 +88,16 @@ int main(int argc, char** argv) {
 
     const ParameterMapping mapping(*model, config.uncertain);
     const PolynomialBasis basis(mapping.germs(), config.pc_order);
-    const Eigen::VectorXd xi =
-        Eigen::Map<const Eigen::VectorXd>(config.truth.xi.data(), config.truth.xi.size());
-    bag.ground_truth = groundTruthMessage(mapping, xi, &basis, bag.origin);
+    bag.ground_truth = groundTruthMessage(mapping, truthXiAt(config, 0.0), &basis, bag.origin);
+    // A truth that changes: also one ground truth per sample, at its stamp.
+    for (std::size_t k = 0; !config.truth.schedule.empty() && k < samples.size(); ++k) {
+      const double t = samples[k].time;
+      ParameterEstimate m =
+          groundTruthMessage(mapping, truthXiAt(config, t), &basis, stampAt(bag.origin, t));
+      m.sample_index = static_cast<std::uint32_t>(k + 1);
+      m.time = t;
+      bag.ground_truth_series.push_back(m);
+    }
 
     writeBag(args["--output"], bag);
     if (args.has("--csv")) {

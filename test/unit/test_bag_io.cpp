@@ -2,6 +2,7 @@
 // matching, merging, and clear errors for unusable bags.
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>
+#include <rosbag/view.h>
 
 #include <cmath>
 #include <filesystem>
@@ -102,6 +103,42 @@ TEST(BagRoundTrip, SynthesizedBagGivesTheCsvSamplesAndTheAnalyticRoad) {
   EXPECT_NEAR(rec.ground_truth->mean[0], 223.26, 1e-9);
   EXPECT_NEAR(rec.ground_truth->mean[1], 0.762 * (1 - 0.25 * 0.3875), 1e-12);
   EXPECT_EQ(rec.ground_truth->stddev, (std::vector<double>{0.0, 0.0}));
+}
+
+TEST(BagRoundTrip, TruthScheduleGivesAGroundTruthPerSample) {
+  ScratchDir dir;
+  const std::string yaml = dir.file("change.yaml"), bag = dir.file("change.bag");
+  {
+    std::ofstream out(yaml);
+    out << test::readText(test::config("speed_bump.yaml"))
+               .substr(0, test::readText(test::config("speed_bump.yaml")).find("truth:"))
+        << "truth:\n  xi: [0.2326, -0.3875]\n  schedule: [{time: 1.5, values: {added_mass: "
+           "263.26}}]\n";
+  }
+  const auto r = test::run(dir, PC_EKF_EXE_SYNTHESIZE_BAG,
+                           "--config " + quote(yaml) + " --output " + quote(bag) + " --road-rate 100");
+  ASSERT_EQ(r.status, 0) << r.err;
+  rosbag::Bag in(bag, rosbag::bagmode::Read);
+  std::vector<ParameterEstimate> truths;
+  for (const auto& m : rosbag::View(in, rosbag::TopicQuery(std::string("ground_truth")))) {
+    truths.push_back(*m.instantiate<ParameterEstimate>());
+  }
+  // One at t = 0, then one per sample at its stamp; the mass grows at 1.5 s.
+  ASSERT_EQ(truths.size(), 11u);
+  const ros::Time origin(1000000000, 0);
+  EXPECT_EQ(truths[0].header.stamp, origin);
+  EXPECT_EQ(truths[0].sample_index, 0u);
+  EXPECT_NEAR(truths[0].mean[0], 223.26, 1e-9);
+  for (std::size_t k = 1; k <= 10; ++k) {
+    const double t = 0.3 * k;
+    EXPECT_EQ(truths[k].sample_index, k);
+    EXPECT_NEAR(truths[k].time, t, 1e-12);
+    EXPECT_NEAR((truths[k].header.stamp - origin).toSec(), t, 1e-9);
+    EXPECT_NEAR(truths[k].mean[0], k >= 5 ? 263.26 : 223.26, 1e-9) << k;
+    EXPECT_NEAR(truths[k].xi_mean[0], k >= 5 ? 0.6326 : 0.2326, 1e-12) << k;
+    EXPECT_NEAR(truths[k].mean[1], 0.762 * (1 - 0.25 * 0.3875), 1e-12);
+  }
+  EXPECT_NEAR(readBag(bag).ground_truth->mean[0], 263.26, 1e-9);  // the last one
 }
 
 TEST(BagRoundTrip, StartTimeAndRoadRateOptions) {

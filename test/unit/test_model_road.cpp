@@ -125,6 +125,75 @@ TEST(SampledRoad, DiscardKeepsTheSampleAtOrBefore) {
   EXPECT_EQ(road.firstTime(), 2.0);
 }
 
+// ---------------------------------------------------------------- course
+
+CourseSegment bumpSegment() {
+  CourseSegment s;
+  s.type = CourseSegment::Type::kSpeedBump;
+  return s;
+}
+
+CourseSegment timedSegment(CourseSegment::Type type, double duration) {
+  CourseSegment s;
+  s.type = type;
+  s.duration = duration;
+  return s;
+}
+
+TEST(CourseRoad, BumpsAreTheSingleBumpShiftedInTime) {
+  // Bump (0.81 s at 16 km/h), 9.19 s flat, bump, 3 s flat.
+  const CourseRoad course({bumpSegment(), timedSegment(CourseSegment::Type::kRest, 9.19),
+                           bumpSegment(), timedSegment(CourseSegment::Type::kRest, 3.0)});
+  const SpeedBumpRoad bump{SpeedBumpSettings()};
+  ASSERT_EQ(course.boundaries().size(), 5u);
+  EXPECT_NEAR(course.boundaries()[1], 0.81, 1e-12);
+  EXPECT_NEAR(course.boundaries()[2], 10.0, 1e-12);
+  EXPECT_NEAR(course.boundaries()[4], 13.81, 1e-12);
+  const double start2 = course.boundaries()[2];
+  for (double t = 0.0; t < 14.5; t += 0.0137) {
+    const Eigen::Vector2d got = course.height(t);
+    Eigen::Vector2d want = Eigen::Vector2d::Zero();
+    if (t < 0.81) want = bump.height(t);
+    if (t >= start2 && t < start2 + 0.81) want = bump.height(t - start2);
+    EXPECT_EQ(got, want) << t;
+  }
+  EXPECT_NEAR(course.height(start2 + 0.3)[0], 0.10, 1e-12);
+  EXPECT_NEAR(course.height(start2 + 0.3)[1], 0.08 * (4.0 / 3.0 - 0.6), 1e-12);
+  EXPECT_EQ(course.height(5.0), Eigen::Vector2d::Zero());
+}
+
+TEST(CourseRoad, BreakpointsIncludeSegmentBoundariesAndShiftedCorners) {
+  const CourseRoad course({bumpSegment(), timedSegment(CourseSegment::Type::kRest, 9.19),
+                           bumpSegment(), timedSegment(CourseSegment::Type::kRest, 3.0)});
+  // First bump's corners (0.81 = its end = a boundary, listed once), then the
+  // second bump's shifted by 10 s and the course's end.
+  expectTimes(course.breakpoints(0.0, 20.0),
+              {0.135, 0.225, 0.36, 0.45, 0.585, 0.675, 0.81, 10.0, 10.135, 10.225, 10.36, 10.45,
+               10.585, 10.675, 10.81, 13.81});
+  expectTimes(course.breakpoints(5.0, 10.3), {10.0, 10.135, 10.225});
+  EXPECT_TRUE(course.breakpoints(1.0, 9.9).empty());
+}
+
+TEST(CourseRoad, SineStartsAtPhaseZeroAndItsEndIsABreakpoint) {
+  CourseSegment sine = timedSegment(CourseSegment::Type::kSine, 1.25);
+  sine.sine.amplitude = 0.02;
+  sine.sine.frequency = 1.0;
+  const CourseRoad course({timedSegment(CourseSegment::Type::kRest, 2.0), sine});
+  EXPECT_EQ(course.height(1.9), Eigen::Vector2d::Zero());
+  EXPECT_EQ(course.height(2.0)[0], 0.0);
+  EXPECT_NEAR(course.height(2.25)[0], 0.02, 1e-12);   // quarter period in
+  EXPECT_NEAR(course.height(2.25)[1], -0.02, 1e-12);  // right_sign -1
+  EXPECT_NEAR(course.height(3.2)[0], 0.02 * std::sin(2.0 * M_PI * 1.2), 1e-12);
+  EXPECT_EQ(course.height(3.25), Eigen::Vector2d::Zero());  // after the course: flat
+  expectTimes(course.breakpoints(0.0, 5.0), {2.0, 3.25});
+}
+
+TEST(CourseRoad, RefusesAnEmptyCourseAndNonPositiveDurations) {
+  EXPECT_THROW(CourseRoad(std::vector<CourseSegment>{}), std::invalid_argument);
+  EXPECT_THROW(CourseRoad({timedSegment(CourseSegment::Type::kRest, 0.0)}), std::invalid_argument);
+  EXPECT_THROW(CourseRoad({timedSegment(CourseSegment::Type::kSine, -1.0)}), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace pc_ekf
 
