@@ -80,9 +80,7 @@ StepResult OneStepFilter::process(const Measurement& m) {
   const int ns = propagator_->stateCount();
   const int np = propagator_->parameterCount();
   if (r.forecast.ok && settings_.drift.size() != 0) {
-    Eigen::MatrixXd theta = x_.bottomRows(np);
-    applyDrift(theta, settings_.drift, dt, propagator_->basis());
-    x_.bottomRows(np) = theta;
+    applyDrift(x_, ns, settings_.drift, dt);
   }
   t_ = m.time;
   r.index = ++samples_;

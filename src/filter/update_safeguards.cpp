@@ -47,27 +47,29 @@ double supportDamping(const Eigen::VectorXd& before, const Eigen::VectorXd& afte
   return gamma;
 }
 
-void applyDrift(Eigen::MatrixXd& theta, const Eigen::VectorXd& intensity, double dt,
-                const PolynomialBasis& basis) {
-  if (intensity.size() == 0 || !(dt > 0.0)) return;
-  for (Eigen::Index i = 0; i < theta.rows() && i < intensity.size(); ++i) {
+void applyDrift(Eigen::MatrixXd& x, int first_parameter, const Eigen::VectorXd& intensity,
+                double dt) {
+  if (intensity.size() == 0 || !(dt > 0.0) || x.cols() < 2) return;
+  const Eigen::Index higher = x.cols() - 1;
+  for (Eigen::Index i = 0; i < intensity.size(); ++i) {
     const double q = intensity[i] * intensity[i] * dt;
-    if (!(q > 0.0)) continue;
-    auto higher = theta.row(i).tail(theta.cols() - 1);
-    const double variance = higher.squaredNorm();
-    if (variance > 0.0) {
-      higher *= std::sqrt((variance + q) / variance);
+    const Eigen::Index row = first_parameter + i;
+    if (!(q > 0.0) || row >= x.rows()) continue;
+    // Directions used by the other rows and this one; a unit vector beyond them.
+    Eigen::MatrixXd used(higher, x.rows());
+    used.leftCols(row) = x.topRows(row).rightCols(higher).transpose();
+    used.col(row) = x.row(row).tail(higher).transpose();
+    used.rightCols(x.rows() - row - 1) = x.bottomRows(x.rows() - row - 1).rightCols(higher).transpose();
+    const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(used);
+    const Eigen::Index rank = qr.rank();
+    if (rank < higher) {
+      const Eigen::MatrixXd q_full = qr.householderQ();
+      x.row(row).tail(higher) += std::sqrt(q) * q_full.col(rank).transpose();
       continue;
     }
-    const auto& indices = basis.multiIndices();
-    for (std::size_t j = 1; j < indices.size(); ++j) {
-      int total = 0;
-      for (int e : indices[j]) total += e;
-      if (total == 1 && indices[j][static_cast<std::size_t>(i)] == 1) {
-        theta(i, static_cast<Eigen::Index>(j)) = std::sqrt(q);
-        break;
-      }
-    }
+    auto own = x.row(row).tail(higher);
+    const double variance = own.squaredNorm();
+    if (variance > 0.0) own *= std::sqrt((variance + q) / variance);
   }
 }
 

@@ -8,7 +8,6 @@
 #include <Eigen/Dense>
 #include <string>
 
-#include "pc/polynomial_basis.h"
 
 namespace pc_ekf {
 
@@ -36,12 +35,15 @@ double supportDamping(const Eigen::VectorXd& before, const Eigen::VectorXd& afte
                       const Eigen::VectorXd& lower, const Eigen::VectorXd& upper);
 
 // Random walk theta_i(t + dt) = theta_i(t) + w, Var(w) = intensity_i^2 dt,
-// without new germs: the higher coefficients of parameter i are scaled so its
-// variance grows by intensity_i^2 dt (variance-matched inflation; correlations
-// with the other rows are kept). A parameter with zero variance gets the
-// increment on the degree-1 term of its own germ. `theta`: parameters x S.
-void applyDrift(Eigen::MatrixXd& theta, const Eigen::VectorXd& intensity, double dt,
-                const PolynomialBasis& basis);
+// independent of everything else, without new germs. `x`: the extended state
+// (rows x S), parameters from row `first_parameter`. The increment is added
+// along a direction of the higher coefficients orthogonal to every other row
+// and to the parameter's own: its variance grows by exactly intensity^2 dt and
+// every covariance stays as it was. When no such direction is left (S - 1 <=
+// rows), the parameter's higher coefficients are scaled instead
+// (variance-matched inflation, correlations kept).
+void applyDrift(Eigen::MatrixXd& x, int first_parameter, const Eigen::VectorXd& intensity,
+                double dt);
 
 // Parameter rows re-opened: kPrior -> the prior coefficients; kWidth -> the
 // current mean with the prior's higher coefficients scaled by `width`.

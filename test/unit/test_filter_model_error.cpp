@@ -162,6 +162,33 @@ TEST(ModelError, ZeroReadingsAtRestStayInTheSupportAndAreFlagged) {
   EXPECT_GT(worst, 1.0);
 }
 
+// config/load_change_course.yaml: bumps at 0 and 10 s, M +40 kg at t = 6 s.
+TEST(LoadChange, FollowedWithDriftOrReopenFlaggedWithout) {
+  const EstimatorConfig base =
+      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/load_change_course.yaml");
+  const auto model = makeModel(base, makeRoad(base));
+  const MeasurementSeries data = synthesizeFromConfig(base, *model, 1);
+  const double new_mass = 263.26, position = 0.762 * (1.0 - 0.25 * 0.3875);
+  // Constant parameters: confidently stuck near the old load, and flagged.
+  const OfflineResult fixed = runOfflineEstimation(base, data, model, EstimationMethod::kOneStep, 1);
+  EXPECT_GT(std::abs(fixed.parameters[0].mean - new_mass), 10.0 * fixed.parameters[0].stddev);
+  EXPECT_FALSE(fixed.healthy);
+  EstimatorConfig drift = base;
+  drift.safeguards.drift = {2.0, 0.0};
+  EstimatorConfig reopen = base;
+  reopen.safeguards.reopen = {ReopenMode::kWidth, 0.5, 10};
+  for (const EstimatorConfig& c : {drift, reopen}) {
+    const OfflineResult r = runOfflineEstimation(c, data, model, EstimationMethod::kOneStep, 1);
+    const ParameterSummary& m = r.parameters[0];
+    const ParameterSummary& d = r.parameters[1];
+    EXPECT_LT(std::abs(m.mean - new_mass), 3.0 * m.stddev) << m.mean << " +- " << m.stddev;
+    EXPECT_LT(std::abs(d.mean - position), 3.0 * d.stddev) << d.mean << " +- " << d.stddev;
+    EXPECT_LT(m.stddev, 2.0);  // still an informative estimate
+    EXPECT_TRUE(r.healthy);
+  }
+  EXPECT_GT(runOfflineEstimation(reopen, data, model, EstimationMethod::kOneStep, 1).reopened, 0);
+}
+
 TEST(PredictiveCheck, StatisticIsTheNormalisedResidualSumOfSquares) {
   // Closed form: data = simulation + known offsets d on every entry; with the
   // paper's R the statistic is sum d^2 / max(r_floor, (rho z)^2).

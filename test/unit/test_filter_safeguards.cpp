@@ -5,7 +5,6 @@
 #include "filter/measurement.h"
 #include "filter/update_safeguards.h"
 #include "io/estimator_config.h"
-#include "pc/pc_statistics.h"
 
 namespace pc_ekf {
 namespace {
@@ -42,26 +41,41 @@ TEST(SupportDamping, LargestStepThatKeepsTheMeansInside) {
   EXPECT_DOUBLE_EQ(supportDamping(Eigen::Vector2d(0, 0), Eigen::Vector2d(NAN, 0), lo, hi), 0.0);
 }
 
-TEST(Drift, VarianceGrowsByIntensitySquaredTimesDt) {
-  const GermSpec beta{GermFamily::kBeta, 2.0, 2.0};
-  const PolynomialBasis basis({beta, beta}, 3);
-  Eigen::MatrixXd theta = Eigen::MatrixXd::Zero(2, basis.size());
-  theta(0, 0) = 200.0;
-  theta(0, 1) = 3.0;
-  theta(0, 4) = 1.0;  // some higher-order content
-  theta(1, 0) = 0.7;  // no variance yet: gets a degree-1 term of its own germ
-  const double v0 = pcStddev(theta)[0] * pcStddev(theta)[0];
-  applyDrift(theta, Eigen::Vector2d(2.0, 0.1), 0.25, basis);
-  const Eigen::VectorXd sd = pcStddev(theta);
-  EXPECT_NEAR(sd[0] * sd[0], v0 + 4.0 * 0.25, 1e-12);
-  EXPECT_NEAR(sd[1] * sd[1], 0.01 * 0.25, 1e-15);
-  EXPECT_DOUBLE_EQ(theta(0, 0), 200.0);  // the mean does not move
-  EXPECT_NEAR(theta(0, 4) / theta(0, 1), 1.0 / 3.0, 1e-15);  // shape kept
-  int own = -1;
-  for (int j = 1; j < basis.size(); ++j) {
-    if (basis.multiIndices()[j] == std::vector<int>{0, 1}) own = j;
-  }
-  EXPECT_NEAR(theta(1, own), 0.05, 1e-15);
+// Covariance of the rows of PC coefficients (sum over the higher terms).
+Eigen::MatrixXd pcCovariance(const Eigen::MatrixXd& x) {
+  const Eigen::MatrixXd a = x.rightCols(x.cols() - 1);
+  return a * a.transpose();
+}
+
+TEST(Drift, IndependentIncrementVarianceGrowsByIntensitySquaredTimesDt) {
+  // 3 states + 2 parameters, S = 10 terms: room for increments orthogonal to
+  // every row, so only the drifting parameters' variances change.
+  Eigen::MatrixXd x = Eigen::MatrixXd::Random(5, 10);
+  x(4, 0) = 0.7;
+  x.row(4).tail(9).setZero();  // a parameter known exactly so far
+  const Eigen::MatrixXd before = pcCovariance(x);
+  const Eigen::VectorXd mean_before = x.col(0);
+  applyDrift(x, 3, Eigen::Vector2d(2.0, 0.1), 0.25);
+  Eigen::MatrixXd expected = before;
+  expected(3, 3) += 4.0 * 0.25;
+  expected(4, 4) += 0.01 * 0.25;
+  EXPECT_LT((pcCovariance(x) - expected).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_EQ(Eigen::VectorXd(x.col(0)), mean_before);  // means do not move
+  // Repeated increments accumulate: a random walk's variance is linear in t.
+  for (int k = 0; k < 3; ++k) applyDrift(x, 3, Eigen::Vector2d(2.0, 0.1), 0.25);
+  expected(3, 3) += 3.0;
+  expected(4, 4) += 3 * 0.0025;
+  EXPECT_LT((pcCovariance(x) - expected).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+TEST(Drift, WithoutRoomTheVarianceIsMatchedByScaling) {
+  Eigen::MatrixXd x = Eigen::MatrixXd::Random(4, 3);  // S - 1 = 2 < 4 rows
+  const Eigen::MatrixXd before = pcCovariance(x);
+  applyDrift(x, 3, Eigen::VectorXd::Constant(1, 1.0), 0.5);
+  const Eigen::MatrixXd after = pcCovariance(x);
+  EXPECT_NEAR(after(3, 3), before(3, 3) + 0.5, 1e-12);
+  const double f = std::sqrt(after(3, 3) / before(3, 3));
+  EXPECT_NEAR(after(0, 3), f * before(0, 3), 1e-12);  // correlations kept
 }
 
 TEST(Reopen, WidthAroundTheMeanOrBackToThePrior) {
