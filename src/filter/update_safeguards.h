@@ -25,7 +25,7 @@ ReopenMode reopenModeFromString(const std::string& s);  // throws std::invalid_a
 struct ReopenSettings {
   ReopenMode mode = ReopenMode::kOff;
   double width = 0.5;  // kWidth: std after re-opening, as a fraction of the prior std
-  int after = 10;      // consecutive samples with the windowed NIS outside its bounds
+  int after = 3;       // consecutive samples with the windowed NIS outside its bounds
 };
 
 // Largest gamma in [0, 1] such that before + gamma (after - before) keeps every

@@ -176,7 +176,7 @@ TEST(LoadChange, FollowedWithDriftOrReopenFlaggedWithout) {
   EstimatorConfig drift = base;
   drift.safeguards.drift = {2.0, 0.0};
   EstimatorConfig reopen = base;
-  reopen.safeguards.reopen = {ReopenMode::kWidth, 0.5, 10};
+  reopen.safeguards.reopen = {ReopenMode::kWidth, 0.5, 3};
   for (const EstimatorConfig& c : {drift, reopen}) {
     const OfflineResult r = runOfflineEstimation(c, data, model, EstimationMethod::kOneStep, 1);
     const ParameterSummary& m = r.parameters[0];
