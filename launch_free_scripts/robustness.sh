@@ -23,13 +23,7 @@ while [ $# -gt 0 ]; do
 done
 [[ "$seeds" =~ ^[1-9][0-9]*$ ]] || { echo "robustness.sh: --seeds needs a positive integer" >&2; exit 2; }
 
-if [ -z "${PC_EKF_BIN:-}" ]; then
-  pc_ekf_ensure_packages
-  pc_ekf_log "building (log: .build/build.log)"
-  pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
-    tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; exit 1; }
-  PC_EKF_BIN="$PC_EKF_WS/devel/lib/pc_ekf"
-fi
+pc_ekf_tools_bin || exit 1
 mkdir -p "$out/runs" "$out/logs"
 start=$SECONDS
 

@@ -52,3 +52,14 @@ pc_ekf_source_workspace() {
   source "$PC_EKF_WS/devel/setup.bash"
   set -u
 }
+
+# Sets PC_EKF_BIN (the tools' folder): as given, or installs what is missing
+# and builds (log .build/build.log).
+pc_ekf_tools_bin() {
+  [ -n "${PC_EKF_BIN:-}" ] && return 0
+  pc_ekf_ensure_packages || return 1
+  pc_ekf_log "building (log: .build/build.log)"
+  pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
+    tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; return 1; }
+  PC_EKF_BIN="$PC_EKF_WS/devel/lib/pc_ekf"
+}

@@ -229,16 +229,7 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
     const PredictiveCheck p = posteriorPredictiveCheck(
         propagator_->model(), map.fullParameters(b.mean), batch_series_, makeNoiseModel(config_),
         config_.integration, map.count(), config_.health.nis_confidence);
-    msg.predictive_available = p.available;
-    msg.predictive_statistic = p.statistic;
-    msg.predictive_dof = static_cast<std::uint32_t>(std::max(0, p.dof));
-    msg.predictive_lower = p.lower;
-    msg.predictive_upper = p.upper;
-    msg.predictive_outside = p.outside;
-    if (p.outside) {
-      msg.healthy = false;
-      msg.warnings.push_back(p.warning(propagator_->model().channelNames(), batch_series_));
-    }
+    setPredictiveCheck(msg, p, p.warning(propagator_->model().channelNames(), batch_series_));
     if (p.available) {
       s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper
         << "]" << (p.outside ? " FAILED" : "");

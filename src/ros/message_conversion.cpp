@@ -252,6 +252,20 @@ void setHealth(ParameterEstimate& msg, const HealthStatus& h, int nis_channels,
   if (msg.coherence_flagged) msg.warnings.push_back(coherenceWarning(msg));
 }
 
+void setPredictiveCheck(ParameterEstimate& msg, const PredictiveCheck& p,
+                        const std::string& warning) {
+  msg.predictive_available = p.available;
+  msg.predictive_statistic = p.statistic;
+  msg.predictive_dof = static_cast<std::uint32_t>(std::max(0, p.dof));
+  msg.predictive_lower = p.lower;
+  msg.predictive_upper = p.upper;
+  msg.predictive_outside = p.outside;
+  if (p.outside) {
+    msg.healthy = false;
+    msg.warnings.push_back(warning);
+  }
+}
+
 void setCoherence(ParameterEstimate& msg, const Eigen::VectorXd& disagreement, int decimation,
                   double threshold) {
   msg.coherence_disagreement = toStd(disagreement);

@@ -17,6 +17,7 @@
 #include "filter/health.h"
 #include "filter/measurement.h"
 #include "filter/one_step_filter.h"
+#include "filter/predictive_check.h"
 #include "filter/uncertain_parameters.h"
 #include "pc/pc_statistics.h"
 #include "pc/polynomial_basis.h"
@@ -86,6 +87,10 @@ struct EstimateContext {
   std::string method = "one_step";
   std::string update_rule;  // "paper" | "square_root" | ""
 };
+
+// Batch results: the posterior-predictive check; outside -> not healthy, `warning` added.
+void setPredictiveCheck(ParameterEstimate& msg, const PredictiveCheck& p,
+                        const std::string& warning);
 
 // The building blocks (the node's batch/EnKF results use them directly):
 // names, mean, stddev and their germ coordinates through `mapping`.
