@@ -7,14 +7,26 @@
 
 namespace pc_ekf {
 
-class RoadInput {
+// The road under any number of contacts (a model's contact names, in order).
+class ContactRoad {
  public:
-  virtual ~RoadInput() = default;
-  // Road heights (m, up positive, 0 at rest) under tyre 1 (left) and tyre 2 (right).
-  virtual Eigen::Vector2d height(double t) const = 0;
+  virtual ~ContactRoad() = default;
+  virtual int contactCount() const = 0;
+  // Heights (m, up positive, 0 at rest) under every contact at t; out has
+  // contactCount() entries.
+  virtual void heights(double t, Eigen::Ref<Eigen::VectorXd> out) const = 0;
   // Times in the open interval (t0, t1) where the input has a kink; the
   // integrator stops there so its order holds across them.
   virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+};
+
+// A road under two contacts (the roll plane's tyres).
+class RoadInput : public ContactRoad {
+ public:
+  // Road heights (m, up positive, 0 at rest) under tyre 1 (left) and tyre 2 (right).
+  virtual Eigen::Vector2d height(double t) const = 0;
+  int contactCount() const override { return 2; }
+  void heights(double t, Eigen::Ref<Eigen::VectorXd> out) const override { out = height(t); }
 };
 
 struct SpeedBumpSettings {
