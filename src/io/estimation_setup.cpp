@@ -6,29 +6,40 @@
 
 namespace pc_ekf {
 
-std::shared_ptr<const RoadInput> makeRoad(const EstimatorConfig& c,
-                                          std::shared_ptr<const RoadInput> sampled) {
+std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
+                                            std::shared_ptr<const ContactRoad> sampled) {
   if (sampled) return sampled;
+  const ModelType& type = *c.model_type;
+  const auto needTwo = [&](const char* source) {
+    if (type.twoContacts()) return;
+    throw ConfigError(c.source + ": key 'road.source': " + source + " is a road under two contacts; " +
+                      "model " + type.name() + " has " + std::to_string(type.contactNames().size()) +
+                      " (use speed_bump, series or topic)");
+  };
   switch (c.road.source) {
-    case RoadSource::kSpeedBump: return std::make_shared<SpeedBumpRoad>(c.road.speed_bump);
-    case RoadSource::kSine: return std::make_shared<SineRoad>(c.road.sine);
+    case RoadSource::kSpeedBump: return type.speedBump(c.road.speed_bump, *c.modelParameters());
+    case RoadSource::kSine: needTwo("sine"); return std::make_shared<SineRoad>(c.road.sine);
     case RoadSource::kSeries: {
       try {
-        const RoadSeries r = readRoadCsvFile(c.road.series_file);
-        return std::make_shared<SampledRoad>(r.t, r.left, r.right);
+        if (type.twoContacts()) {
+          const RoadSeries r = readRoadCsvFile(c.road.series_file);
+          return std::make_shared<SampledRoad>(r.t, r.left, r.right);
+        }
+        ContactSeries r = readContactRoadCsvFile(c.road.series_file, type.roadColumns());
+        return std::make_shared<SampledContactRoad>(std::move(r.t), std::move(r.heights));
       } catch (const CsvError& e) {
         throw ConfigError(c.source + ": key 'road.series.file': " + e.what());
       }
     }
-    case RoadSource::kCourse: return std::make_shared<CourseRoad>(c.road.course);
+    case RoadSource::kCourse: needTwo("course"); return std::make_shared<CourseRoad>(c.road.course);
     case RoadSource::kTopic: break;
   }
   throw std::invalid_argument(c.source + ": road.source is topic but no road samples were given");
 }
 
-std::shared_ptr<const RollPlaneModel> makeModel(const EstimatorConfig& c,
-                                                std::shared_ptr<const RoadInput> road) {
-  return std::make_shared<RollPlaneModel>(c.vehicle, std::move(road));
+std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
+                                                 std::shared_ptr<const ContactRoad> road) {
+  return c.model_type->build(*c.modelParameters(), std::move(road));
 }
 
 std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
@@ -92,24 +103,28 @@ EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
 }
 
 std::vector<int> channelIndices(const EstimatorConfig& c) {
-  const std::vector<std::string> names{"u1", "u2", "v1", "v2"};
+  const std::vector<std::string>& names = c.model_type->channelNames();
   std::vector<int> idx;
-  for (int i = 0; i < 4; ++i) {
+  for (std::size_t i = 0; i < names.size(); ++i) {
     for (const auto& ch : c.measurement.channels) {
-      if (ch == names[i]) idx.push_back(i);
+      if (ch == names[i]) idx.push_back(static_cast<int>(i));
     }
   }
   return idx;
 }
 
+// The model the truth is simulated with on `road` (the estimator model's road
+// when none is given).
 std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
                                                   const MechanicalModel& model) {
   // Non-owning: the estimator's model is the caller's.
-  if (!c.truth.vehicle) return std::shared_ptr<const MechanicalModel>(std::shared_ptr<void>(), &model);
-  const auto* roll = dynamic_cast<const RollPlaneModel*>(&model);
-  if (!roll) throw ConfigError(c.source + ": key 'truth.vehicle': the model is no vehicle model");
-  const std::shared_ptr<const RoadInput> road(std::shared_ptr<void>(), &roll->road());
-  return std::make_shared<RollPlaneModel>(*c.truth.vehicle, road);
+  if (!c.truth.vehicle && !c.truth.model) {
+    return std::shared_ptr<const MechanicalModel>(std::shared_ptr<void>(), &model);
+  }
+  const ContactRoad* road = model.contactRoad();
+  if (!road) throw ConfigError(c.source + ": key 'truth.vehicle': the model has no road to share");
+  const std::shared_ptr<const ContactRoad> shared(std::shared_ptr<void>(), road);
+  return c.model_type->build(*c.truthModelParameters(), shared);
 }
 
 namespace {
@@ -167,15 +182,17 @@ MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const Mechanica
                                 syntheticSettings(c, *truth, seed));
 }
 
-RoadSeries sampleRoad(const RoadInput& road, double t_end, double rate) {
+RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate) {
+  if (road.contactCount() != 2) throw std::invalid_argument("sampleRoad: a two-contact road expected");
   const long count = static_cast<long>(std::ceil(t_end * rate - 1e-9)) + 1;
   RoadSeries r;
   r.t.reserve(count);
   r.left.reserve(count);
   r.right.reserve(count);
+  Eigen::VectorXd y(2);
   for (long i = 0; i < count; ++i) {
     const double t = static_cast<double>(i) / rate;
-    const Eigen::Vector2d y = road.height(t);
+    road.heights(t, y);
     r.t.push_back(t);
     r.left.push_back(y(0));
     r.right.push_back(y(1));

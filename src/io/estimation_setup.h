@@ -19,10 +19,13 @@ namespace pc_ekf {
 // Road of the config; `sampled` replaces it when given (road from a bag/topic).
 // Throws ConfigError (series file unreadable) or std::invalid_argument
 // (source topic without samples).
-std::shared_ptr<const RoadInput> makeRoad(const EstimatorConfig& c,
-                                          std::shared_ptr<const RoadInput> sampled = nullptr);
-std::shared_ptr<const RollPlaneModel> makeModel(const EstimatorConfig& c,
-                                                std::shared_ptr<const RoadInput> road);
+// Throws ConfigError also for a road source the model's contacts cannot take
+// (sine and course are two-contact roads).
+std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
+                                            std::shared_ptr<const ContactRoad> sampled = nullptr);
+// The config's model type with its parameters on `road`.
+std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
+                                                 std::shared_ptr<const ContactRoad> road);
 // Throws ConfigError naming collocation.points for a degenerate design.
 std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model);
@@ -38,9 +41,9 @@ std::vector<int> channelIndices(const EstimatorConfig& c);
 // the same road.
 MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const MechanicalModel& model,
                                        std::uint64_t seed);
-// The model the truth is simulated with: `model` itself, or a RollPlaneModel
-// of truth.vehicle on model's road (which must outlive the result). Throws
-// ConfigError when truth.vehicle is given for a model that is no RollPlaneModel.
+// The model the truth is simulated with: `model` itself, or the config's
+// model type with truth.vehicle applied on model's road (which must outlive
+// the result). Throws ConfigError when the model has no road to share.
 std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
                                                   const MechanicalModel& model);
 // Full parameter vector of the truth model at t = 0 (truth.xi).
@@ -57,6 +60,6 @@ SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const Mechanic
 
 // `road` sampled at `rate` Hz from t = 0 until the first time >= t_end: the
 // road/profile stream a bag or a live vehicle would carry.
-RoadSeries sampleRoad(const RoadInput& road, double t_end, double rate);
+RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate);
 
 }  // namespace pc_ekf

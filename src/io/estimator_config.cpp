@@ -17,33 +17,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-void readVehicle(YamlMapReader r, VehicleParameters& v) {
-  Eigen::VectorXd p = v.toVector();
-  const auto& names = vehicleParameterNames();
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    const std::string& n = names[i];
-    if (n == "damping_left" || n == "damping_right" || n == "spring_cubic_left" ||
-        n == "spring_cubic_right" || n == "added_mass") {
-      r.number(n, p[i], 0.0, kInf);
-    } else if (n != "added_mass_position") {
-      r.number(n, p[i], 0.0, kInf, true);
-    }
-  }
-  const int length = static_cast<int>(std::find(names.begin(), names.end(), "bar_length") -
-                                       names.begin());
-  const int position = static_cast<int>(
-      std::find(names.begin(), names.end(), "added_mass_position") - names.begin());
-  r.number("added_mass_position", p[position], 0.0, p[length]);
-  std::string damper = v.damper == DamperLaw::kTanh ? "tanh" : "linear";
-  r.text("damper", damper);
-  if (damper != "tanh" && damper != "linear") r.fail("damper", "'" + damper + "'", "tanh or linear");
-  v = VehicleParameters::fromVector(p, v);
-  v.damper = damper == "tanh" ? DamperLaw::kTanh : DamperLaw::kLinear;
-  r.number("damper_tanh_scale", v.damper_tanh_scale, 0.0, kInf, true);
-  r.number("damper_tanh_rate", v.damper_tanh_rate, 0.0, kInf, true);
-  r.finish();
-}
-
 GermSpec readGerm(YamlMapReader r) {
   GermSpec g;
   std::string family = "beta";
@@ -61,14 +34,15 @@ GermSpec readGerm(YamlMapReader r) {
   return g;
 }
 
-std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const VehicleParameters& v) {
+std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const ModelType& type,
+                                              const ModelParameters& parameters) {
   std::vector<UncertainParameter> out;
   const YAML::Node seq = root.sequence("uncertain");
   if (!seq.IsDefined() || seq.IsNull() || seq.size() == 0) {
     root.fail("uncertain", "(empty)", "a list of at least one uncertain parameter");
   }
-  const auto& names = vehicleParameterNames();
-  const Eigen::VectorXd values = v.toVector();
+  const auto& names = type.parameterNames();
+  const Eigen::VectorXd& values = parameters.values;
   std::set<std::string> seen;
   for (std::size_t i = 0; i < seq.size(); ++i) {
     YamlMapReader r(seq[i], root.keyPath("uncertain[" + std::to_string(i) + "]"), root.source());
@@ -368,12 +342,16 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
     }
   }
   if (override_vehicle) {
-    VehicleParameters p = c.vehicle;
-    readVehicle(v, p);
-    c.truth.vehicle = p;
+    const auto p = c.model_type->read(v, *c.model);
+    v.finish();
+    if (c.rollPlane()) {
+      c.truth.vehicle = rollPlaneVehicle(*p);
+    } else {
+      c.truth.model = p;
+    }
   }
 
-  constexpr std::size_t kChannels = 4;  // u1, u2, v1, v2
+  const std::size_t kChannels = c.model_type->channelNames().size();
   YamlMapReader s = t.map("sensor");
   s.numberPerItem("noise_floor", c.truth.sensor.noise_floor, kChannels, 0.0, kInf);
   s.numberPerItem("bias", c.truth.sensor.bias, kChannels, -kInf, kInf);
@@ -417,6 +395,16 @@ std::string toString(RoadSource s) {
   return "?";
 }
 
+std::shared_ptr<const ModelParameters> EstimatorConfig::modelParameters() const {
+  if (rollPlane()) return rollPlaneParameters(vehicle);
+  return model ? model : model_type->defaults();
+}
+
+std::shared_ptr<const ModelParameters> EstimatorConfig::truthModelParameters() const {
+  if (rollPlane()) return rollPlaneParameters(truth.vehicle ? *truth.vehicle : vehicle);
+  return truth.model ? truth.model : modelParameters();
+}
+
 std::vector<GermSpec> EstimatorConfig::germs() const {
   std::vector<GermSpec> g;
   for (const auto& u : uncertain) g.push_back(u.germ);
@@ -431,12 +419,32 @@ Eigen::VectorXd EstimatorConfig::parameterValues(const Eigen::VectorXd& xi) cons
   return v;
 }
 
-EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_name) {
+EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_name,
+                            const ModelRegistry& models) {
   EstimatorConfig c;
   c.source = source_name;
   YamlMapReader root(node, "", source_name);
-  readVehicle(root.map("vehicle"), c.vehicle);
-  c.uncertain = readUncertain(root, c.vehicle);
+  YamlMapReader model = root.map("model");
+  std::string type = c.model_type->name();
+  model.text("type", type);
+  try {
+    c.model_type = models.find(type);
+  } catch (const std::exception& e) {
+    model.fail("type", "'" + type + "'", std::string("a loadable model (") + e.what() + ")");
+  }
+  if (!c.model_type) {
+    std::string known;
+    for (const auto& name : models.builtinNames()) known += (known.empty() ? "" : ", ") + name;
+    model.fail("type", "'" + type + "'", known + " or a plugin's package/Class");
+  }
+  model.finish();
+  {
+    YamlMapReader v = root.map("vehicle");
+    c.model = c.model_type->read(v, *c.model_type->defaults());
+    v.finish();
+  }
+  if (c.rollPlane()) c.vehicle = rollPlaneVehicle(*c.model);
+  c.uncertain = readUncertain(root, *c.model_type, *c.model);
   const int n = static_cast<int>(c.uncertain.size());
 
   YamlMapReader pc = root.map("pc");
@@ -473,12 +481,16 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   s.finish();
 
   YamlMapReader m = root.map("measurement");
+  const std::vector<std::string>& model_channels = c.model_type->channelNames();
+  c.measurement.channels = model_channels;
   m.textList("channels", c.measurement.channels);
-  const std::set<std::string> known{"u1", "u2", "v1", "v2"};
+  const std::set<std::string> known(model_channels.begin(), model_channels.end());
+  std::string channel_list;
+  for (const auto& ch : model_channels) channel_list += (channel_list.empty() ? "" : ", ") + ch;
   std::set<std::string> seen;
   for (const auto& ch : c.measurement.channels) {
     if (!known.count(ch) || !seen.insert(ch).second) {
-      m.fail("channels", "'" + ch + "'", "distinct channels among u1, u2, v1, v2");
+      m.fail("channels", "'" + ch + "'", "distinct channels among " + channel_list);
     }
   }
   if (c.measurement.channels.empty()) m.fail("channels", "(empty)", "at least one channel");
@@ -495,7 +507,7 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   if (c.measurement.r_rule == NoiseRule::kSensor) {
     if (c.measurement.sensor_std.size() != known.size()) {
       m.fail("sensor_std", c.measurement.sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(c.measurement.sensor_std.size()),
-             "with r_rule sensor: one absolute std per channel u1, u2, v1, v2 (or one for all)");
+             "with r_rule sensor: one absolute std per channel " + channel_list + " (or one for all)");
     }
     for (double v : c.measurement.sensor_std) {
       if (!(v > 0.0)) m.fail("sensor_std", std::to_string(v), "positive standard deviations (m, m/s)");
@@ -522,7 +534,8 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   return c;
 }
 
-EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name) {
+EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name,
+                                  const ModelRegistry& models) {
   YAML::Node node;
   try {
     node = YAML::Load(yaml_text);
@@ -530,15 +543,15 @@ EstimatorConfig parseConfigString(const std::string& yaml_text, const std::strin
     throw ConfigError(source_name + ": line " + std::to_string(e.mark.line + 1) +
                       ": not valid YAML (" + e.msg + ")");
   }
-  return parseConfig(node, source_name);
+  return parseConfig(node, source_name, models);
 }
 
-EstimatorConfig loadConfigFile(const std::string& path) {
+EstimatorConfig loadConfigFile(const std::string& path, const ModelRegistry& models) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open the configuration file");
   std::stringstream text;
   text << in.rdbuf();
-  return parseConfigString(text.str(), path);
+  return parseConfigString(text.str(), path, models);
 }
 
 }  // namespace pc_ekf

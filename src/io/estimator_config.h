@@ -15,6 +15,7 @@
 #include "filter/synthetic_data.h"
 #include "filter/uncertain_parameters.h"
 #include "filter/update_safeguards.h"
+#include "io/model_type.h"
 #include "model/integrator.h"
 #include "model/road_input.h"
 #include "model/roll_plane_model.h"
@@ -76,7 +77,9 @@ struct TruthConfig {
   // `vehicle` with truth.vehicle's keys applied, resolved when parsed; unset:
   // the truth uses `vehicle`.
   std::optional<VehicleParameters> vehicle;
-  SensorImperfections sensor;  // per model channel u1, u2, v1, v2
+  // Other model types: the model's parameters with truth.vehicle applied (unset: `model`'s).
+  std::shared_ptr<const ModelParameters> model;
+  SensorImperfections sensor;  // per model channel (roll plane: u1, u2, v1, v2)
   TimingImperfections timing;
   std::vector<TruthChange> schedule;  // times increasing, > 0
 };
@@ -150,7 +153,17 @@ struct NodeConfig {
 
 struct EstimatorConfig {
   std::string source = "<config>";  // file name, for messages
+  // model.type and the model's `vehicle:` section. For roll_plane, `vehicle`
+  // is the source of truth (code may edit it); other types keep theirs in
+  // `model`.
+  std::shared_ptr<const ModelType> model_type = rollPlaneType();
+  std::shared_ptr<const ModelParameters> model;
   VehicleParameters vehicle;
+  // The model's settings: from `vehicle` for roll_plane, else `model`.
+  std::shared_ptr<const ModelParameters> modelParameters() const;
+  // The truth's (truth.vehicle applied).
+  std::shared_ptr<const ModelParameters> truthModelParameters() const;
+  bool rollPlane() const { return model_type->name() == "roll_plane"; }
   std::vector<UncertainParameter> uncertain;
   int pc_order = 4;
   CollocationConfig collocation;
@@ -173,9 +186,12 @@ struct EstimatorConfig {
   Eigen::VectorXd parameterValues(const Eigen::VectorXd& xi) const;
 };
 
-// Throws ConfigError.
-EstimatorConfig loadConfigFile(const std::string& path);
-EstimatorConfig parseConfig(const YAML::Node& root, const std::string& source_name);
-EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name);
+// Throws ConfigError. `models` resolves model.type (built-ins by default).
+EstimatorConfig loadConfigFile(const std::string& path,
+                               const ModelRegistry& models = ModelRegistry::builtins());
+EstimatorConfig parseConfig(const YAML::Node& root, const std::string& source_name,
+                            const ModelRegistry& models = ModelRegistry::builtins());
+EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name,
+                                  const ModelRegistry& models = ModelRegistry::builtins());
 
 }  // namespace pc_ekf

@@ -95,13 +95,22 @@ std::ifstream openOrThrow(const std::string& path) {
 
 }  // namespace
 
-MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source) {
+const std::vector<std::string>& rollPlaneChannels() {
+  static const std::vector<std::string> c{"u1", "u2", "v1", "v2"};
+  return c;
+}
+
+MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
+                                     const std::vector<std::string>& channels) {
   MeasurementSeries series;
-  for (const auto& row : readTable(in, source, {"t", "u1", "u2", "v1", "v2"}, true)) {
+  std::vector<std::string> header{"t"};
+  header.insert(header.end(), channels.begin(), channels.end());
+  const int count = static_cast<int>(channels.size());
+  for (const auto& row : readTable(in, source, header, true)) {
     Measurement m;
     m.time = row[0];
     std::vector<double> values;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < count; ++c) {
       if (std::isnan(row[c + 1])) continue;
       m.channels.push_back(c);
       values.push_back(row[c + 1]);
@@ -112,16 +121,21 @@ MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source
   return series;
 }
 
-MeasurementSeries readMeasurementCsvFile(const std::string& path) {
+MeasurementSeries readMeasurementCsvFile(const std::string& path,
+                                         const std::vector<std::string>& channels) {
   std::ifstream in = openOrThrow(path);
-  return readMeasurementCsv(in, path);
+  return readMeasurementCsv(in, path, channels);
 }
 
-void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series) {
-  out << "t,u1,u2,v1,v2\n" << std::setprecision(17);
+void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series,
+                         const std::vector<std::string>& channels) {
+  out << "t";
+  for (const auto& name : channels) out << ',' << name;
+  out << '\n' << std::setprecision(17);
+  const int count = static_cast<int>(channels.size());
   for (const auto& m : series) {
     out << m.time;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < count; ++c) {
       out << ',';
       for (std::size_t i = 0; i < m.channels.size(); ++i) {
         if (m.channels[i] == c) out << m.values[i];
@@ -137,6 +151,20 @@ RoadSeries readRoadCsv(std::istream& in, const std::string& source) {
     road.t.push_back(row[0]);
     road.left.push_back(row[1]);
     road.right.push_back(row[2]);
+  }
+  return road;
+}
+
+ContactSeries readContactRoadCsvFile(const std::string& path,
+                                     const std::vector<std::string>& columns) {
+  std::ifstream in = openOrThrow(path);
+  std::vector<std::string> header{"t"};
+  header.insert(header.end(), columns.begin(), columns.end());
+  ContactSeries road;
+  road.heights.resize(columns.size());
+  for (const auto& row : readTable(in, path, header, false)) {
+    road.t.push_back(row[0]);
+    for (std::size_t c = 0; c < columns.size(); ++c) road.heights[c].push_back(row[c + 1]);
   }
   return road;
 }

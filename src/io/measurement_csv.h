@@ -1,6 +1,7 @@
-// The measurement and road CSV formats of INTERFACE.md:
-//   measurements: header t,u1,u2,v1,v2; empty cell or nan = not observed
-//   road:         header t,y1,y2
+// The measurement and road CSV formats:
+//   measurements: header t, then the model's channels (roll plane t,u1,u2,v1,v2);
+//                 empty cell or nan = not observed
+//   road:         header t, then the model's road columns (roll plane t,y1,y2)
 // SI units, one sample a row, time strictly increasing.
 #pragma once
 
@@ -19,9 +20,21 @@ class CsvError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source);
-MeasurementSeries readMeasurementCsvFile(const std::string& path);
-void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series);
+// `channels`: the model's channel names (column c+1 = channel c).
+const std::vector<std::string>& rollPlaneChannels();
+MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
+                                     const std::vector<std::string>& channels = rollPlaneChannels());
+MeasurementSeries readMeasurementCsvFile(
+    const std::string& path, const std::vector<std::string>& channels = rollPlaneChannels());
+void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series,
+                         const std::vector<std::string>& channels = rollPlaneChannels());
+
+// A road of any number of contacts: times and one column per contact.
+struct ContactSeries {
+  std::vector<double> t;
+  std::vector<std::vector<double>> heights;  // [contact][sample]
+};
+ContactSeries readContactRoadCsvFile(const std::string& path, const std::vector<std::string>& columns);
 
 struct RoadSeries {
   std::vector<double> t, left, right;

@@ -170,7 +170,7 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
 }
 
 void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
-             std::shared_ptr<const RollPlaneModel> model, std::uint64_t seed,
+             std::shared_ptr<const MechanicalModel> model, std::uint64_t seed,
              const ProgressCallback& progress, OfflineResult* r) {
   EnkfSettings s = makeEnkfSettings(c);
   s.seed = c.enkf.seed + seed;
@@ -199,7 +199,7 @@ void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
 }
 
 void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
-             std::shared_ptr<const RollPlaneModel> model, const ProgressCallback& progress,
+             std::shared_ptr<const MechanicalModel> model, const ProgressCallback& progress,
              const CoarseGridCache* cache, OfflineResult* r) {
   const ReferencePosterior p = computeReferencePosterior(
       *model, ParameterMapping(*model, c.uncertain), series, makeNoiseModel(c), c.integration,
@@ -219,7 +219,7 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
 }  // namespace
 
 OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,
-                                   std::shared_ptr<const RollPlaneModel> model,
+                                   std::shared_ptr<const MechanicalModel> model,
                                    EstimationMethod method, std::uint64_t seed,
                                    const ProgressCallback& progress,
                                    const CoarseGridCache* grid_cache) {

@@ -12,7 +12,7 @@
 #include "filter/measurement.h"
 #include "filter/predictive_check.h"
 #include "io/estimator_config.h"
-#include "model/roll_plane_model.h"
+#include "model/mechanical_model.h"
 #include "pc/pc_statistics.h"
 
 namespace pc_ekf {
@@ -75,7 +75,7 @@ class CoarseGridCache;
 // record's sample times; they do not depend on the data, so reproductions over
 // many seeds build it once per configuration.
 OfflineResult runOfflineEstimation(const EstimatorConfig& config, const MeasurementSeries& series,
-                                   std::shared_ptr<const RollPlaneModel> model,
+                                   std::shared_ptr<const MechanicalModel> model,
                                    EstimationMethod method, std::uint64_t seed,
                                    const ProgressCallback& progress = {},
                                    const CoarseGridCache* grid_cache = nullptr);

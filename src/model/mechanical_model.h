@@ -10,6 +10,8 @@
 
 namespace pc_ekf {
 
+class ContactRoad;
+
 // A model evaluated for a fixed batch of parameter vectors (one column each).
 // Built by MechanicalModel::prepare, which does the per-parameter work once
 // (e.g. the static equilibrium), so derivatives() is cheap.
@@ -56,6 +58,10 @@ class MechanicalModel {
 
   // Kinks of the model's inputs in (t0, t1) (see RoadInput::breakpoints).
   virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+
+  // The road the model rides on (nullptr for a model without one), so that a
+  // variant of the model (another vehicle) can be built on the same road.
+  virtual const ContactRoad* contactRoad() const { return nullptr; }
 
   int parameterIndex(const std::string& name) const;  // -1 when unknown
 };

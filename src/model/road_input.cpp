@@ -196,4 +196,41 @@ std::vector<double> SampledRoad::breakpoints(double t0, double t1) const {
   return std::vector<double>(first, last);
 }
 
+SampledContactRoad::SampledContactRoad(std::vector<double> t, std::vector<std::vector<double>> heights)
+    : t_(std::move(t)), heights_(std::move(heights)) {
+  if (heights_.empty()) throw std::invalid_argument("sampled road: no contacts");
+  for (const auto& h : heights_) {
+    if (h.size() != t_.size()) throw std::invalid_argument("sampled road: a column's length differs from the times'");
+    for (double v : h) {
+      if (!std::isfinite(v)) throw std::invalid_argument("sampled road: non-finite height");
+    }
+  }
+  for (std::size_t k = 1; k < t_.size(); ++k) {
+    if (!(t_[k] > t_[k - 1])) throw std::invalid_argument("sampled road: times not strictly increasing");
+  }
+}
+
+void SampledContactRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) const {
+  const std::size_t n = heights_.size();
+  if (t_.empty()) {
+    out.setZero();
+    return;
+  }
+  if (t <= t_.front() || t >= t_.back()) {
+    const std::size_t k = t <= t_.front() ? 0 : t_.size() - 1;
+    for (std::size_t c = 0; c < n; ++c) out[c] = heights_[c][k];
+    return;
+  }
+  const std::size_t i = std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1;
+  const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
+  for (std::size_t c = 0; c < n; ++c) out[c] = heights_[c][i] + w * (heights_[c][i + 1] - heights_[c][i]);
+}
+
+std::vector<double> SampledContactRoad::breakpoints(double t0, double t1) const {
+  const auto first = std::upper_bound(t_.begin(), t_.end(), t0);
+  const auto last = std::lower_bound(t_.begin(), t_.end(), t1);
+  if (first >= last) return {};
+  return std::vector<double>(first, last);
+}
+
 }  // namespace pc_ekf

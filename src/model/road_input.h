@@ -118,4 +118,19 @@ class SampledRoad : public RoadInput {
   std::vector<double> t_, left_, right_;
 };
 
+// A sampled road under any number of contacts, linearly interpolated and
+// held constant outside its span (a road CSV or the road/heights topic).
+class SampledContactRoad : public ContactRoad {
+ public:
+  // heights[c][k]: contact c at t[k]; t strictly increasing. Throws std::invalid_argument.
+  SampledContactRoad(std::vector<double> t, std::vector<std::vector<double>> heights);
+  int contactCount() const override { return static_cast<int>(heights_.size()); }
+  void heights(double t, Eigen::Ref<Eigen::VectorXd> out) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+
+ private:
+  std::vector<double> t_;
+  std::vector<std::vector<double>> heights_;
+};
+
 }  // namespace pc_ekf

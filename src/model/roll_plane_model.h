@@ -72,6 +72,7 @@ class RollPlaneModel : public MechanicalModel {
 
   const VehicleParameters& nominal() const { return nominal_; }
   const RoadInput& road() const { return *road_; }
+  const ContactRoad* contactRoad() const override { return road_.get(); }
 
  private:
   VehicleParameters nominal_;

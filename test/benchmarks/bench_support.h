@@ -50,7 +50,7 @@ inline EstimatorConfig paperConfig(int samples, Integration integration = Integr
 
 struct Scenario {
   EstimatorConfig config;
-  std::shared_ptr<const RollPlaneModel> model;
+  std::shared_ptr<const MechanicalModel> model;
   std::shared_ptr<const PcPropagator> propagator;
   MeasurementSeries series;
 };

@@ -74,7 +74,7 @@ int run(const Options& o) {
   c.node.pdf_every = o.pdf_every;
 
   // The truth: one point of the model on the analytic road, streamed.
-  const auto analytic_road = makeRoad(c);
+  const auto analytic_road = std::dynamic_pointer_cast<const RoadInput>(makeRoad(c));
   const auto truth_model = makeModel(c, analytic_road);
   const auto truth_batch = truth_model->prepare(truthParameters(c, *truth_model));
   Eigen::ArrayXXd y = truth_batch->initialState();

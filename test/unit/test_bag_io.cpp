@@ -82,7 +82,7 @@ TEST(BagRoundTrip, SynthesizedBagGivesTheCsvSamplesAndTheAnalyticRoad) {
   }
   // The same data as estimate_offline would synthesise with that seed.
   const EstimatorConfig config = loadConfigFile(test::config("speed_bump.yaml"));
-  const auto road = makeRoad(config);
+  const auto road = std::dynamic_pointer_cast<const RoadInput>(makeRoad(config));
   const MeasurementSeries direct = synthesizeFromConfig(config, *makeModel(config, road), 3);
   EXPECT_LE((rec.samples.back().values - direct.back().values).cwiseAbs().maxCoeff(), 1e-12);
 

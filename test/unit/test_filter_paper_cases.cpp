@@ -13,7 +13,7 @@ const std::string kConfig = std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump
 
 struct CaseData {
   EstimatorConfig config;
-  std::shared_ptr<const RollPlaneModel> model;
+  std::shared_ptr<const MechanicalModel> model;
   MeasurementSeries data;
 };
 

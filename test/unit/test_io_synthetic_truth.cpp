@@ -43,9 +43,9 @@ std::string errorOf(const std::string& truth, const std::string& extra = "") {
 struct Case {
   EstimatorConfig c;
   std::shared_ptr<const RoadInput> road;
-  std::shared_ptr<const RollPlaneModel> model;
+  std::shared_ptr<const MechanicalModel> model;
   explicit Case(EstimatorConfig config) : c(std::move(config)) {
-    road = makeRoad(c);
+    road = std::dynamic_pointer_cast<const RoadInput>(makeRoad(c));
     model = makeModel(c, road);
   }
   MeasurementSeries data(std::uint64_t seed = 1) const {
@@ -139,7 +139,7 @@ TEST(SyntheticTruth, VehicleOverrideEqualsAModelOfTheOverriddenVehicle) {
   const Case plain(bumpConfig(""));
   const Case over(bumpConfig("vehicle: {spring_linear_left: 20325.06}"));
   // The estimator keeps the vehicle section.
-  EXPECT_EQ(over.model->nominal().spring_linear[0], 19357.2);
+  EXPECT_EQ(dynamic_cast<const RollPlaneModel&>(*over.model).nominal().spring_linear[0], 19357.2);
   ASSERT_TRUE(over.c.truth.vehicle.has_value());
   EXPECT_EQ(over.c.truth.vehicle->spring_linear[0], 20325.06);
   EXPECT_EQ(over.c.truth.vehicle->spring_linear[1], 19357.2);
@@ -166,7 +166,7 @@ TEST(SyntheticTruth, VehicleOverrideEqualsAModelOfTheOverriddenVehicle) {
 TEST(SyntheticTruth, DamperLawOverrideChangesTheData) {
   const Case plain(bumpConfig(""));
   const Case linear(bumpConfig("vehicle: {damper: linear}"));
-  EXPECT_EQ(linear.model->nominal().damper, DamperLaw::kTanh);
+  EXPECT_EQ(dynamic_cast<const RollPlaneModel&>(*linear.model).nominal().damper, DamperLaw::kTanh);
   EXPECT_GT(maxDifference(linear.data(), plain.data()), 1e-3);
 }
 
