@@ -11,57 +11,117 @@ namespace pc_ekf {
 
 namespace {
 
-// Per-point constants, so derivatives() does no equilibrium or parameter work.
-struct CornerConstants {
-  double x, y;                          // position relative to O
-  double k, k3, three_delta, three_delta_sq;  // spring law about the static compression
-  double damping;                       // c (linear) or c * tanh scale
-  double inv_unsprung;
-};
+// Per-point constants in one Q x kCount table, one contiguous column per
+// quantity (structure of arrays), so derivatives() does no equilibrium or
+// parameter work and the transposed loop over the points can vectorise.
 struct PointConstants {
-  CornerConstants corner[4];
-  double tyre;
-  Eigen::Matrix3d inv_body_mass;  // M_b^-1 for q = (z, theta, phi)
+  enum Column {
+    kX = 0,                // corner position relative to O, 4 each
+    kY = 4,
+    kK = 8,                // spring law about the static compression delta
+    kK3 = 12,
+    kThreeDelta = 16,
+    kThreeDeltaSq = 20,
+    kDamping = 24,         // c (linear) or c * tanh scale
+    kInvUnsprung = 28,
+    kTyre = 32,
+    kInvBodyMass = 33,     // M_b^-1, row-major 3 x 3
+    kCount = 42
+  };
+  Eigen::ArrayXXd table;
+  explicit PointConstants(Eigen::Index q) : table(q, kCount) {}
+  double& operator()(Eigen::Index q, int column) { return table(q, column); }
+  Eigen::Index size() const { return table.rows(); }
+  const double* column(int c) const { return table.col(c).data(); }
 };
 
-// F_K(delta) - F_K(delta - u), expanded so that it is exactly 0 at u = 0.
-inline double springIncrement(double u, const CornerConstants& c) {
-  return u * (c.k + c.k3 * (c.three_delta_sq - c.three_delta * u + u * u));
-}
+// Raw column pointers (loop-invariant in the vectorised loop).
+struct ConstantPointers {
+  const double *x[4], *y[4], *k[4], *k3[4], *three_delta[4], *three_delta_sq[4], *damping[4],
+      *inv_unsprung[4];
+  const double* tyre;
+  const double* inv_body_mass[9];
+  explicit ConstantPointers(const PointConstants& c) {
+    using C = PointConstants;
+    for (int i = 0; i < 4; ++i) {
+      x[i] = c.column(C::kX + i);
+      y[i] = c.column(C::kY + i);
+      k[i] = c.column(C::kK + i);
+      k3[i] = c.column(C::kK3 + i);
+      three_delta[i] = c.column(C::kThreeDelta + i);
+      three_delta_sq[i] = c.column(C::kThreeDeltaSq + i);
+      damping[i] = c.column(C::kDamping + i);
+      inv_unsprung[i] = c.column(C::kInvUnsprung + i);
+    }
+    tyre = c.column(C::kTyre);
+    for (int j = 0; j < 9; ++j) inv_body_mass[j] = c.column(C::kInvBodyMass + j);
+  }
+};
 
+// One point q: state s[14] -> d[14] at stride `stride` (1: column-major
+// states, Q: the transposed layout). Branch-free, so a loop over q vectorises.
 template <DamperLaw law>
-void pointDerivatives(const PointConstants& p, double tanh_rate, const double road[4],
-                      const double* s, double* d) {
+__attribute__((always_inline)) inline void pointDerivatives(const ConstantPointers& c,
+                                                            Eigen::Index q, double tanh_rate,
+                                                            const double road[4], const double* s,
+                                                            double* d, Eigen::Index stride) {
+  const auto at = [&](int i) { return s[i * stride]; };
   double f[4];
   double gen[3] = {0.0, 0.0, 0.0};  // generalised force on (z, theta, phi)
   for (int i = 0; i < 4; ++i) {
-    const CornerConstants& c = p.corner[i];
-    const double u = s[0] + c.x * s[1] + c.y * s[2] - s[3 + i];
-    const double v = s[7] + c.x * s[8] + c.y * s[9] - s[10 + i];
-    const double damper =
-        law == DamperLaw::kTanh ? c.damping * fastTanh(tanh_rate * v) : c.damping * v;
-    f[i] = -springIncrement(u, c) - damper;
+    const double x = c.x[i][q], y = c.y[i][q];
+    const double u = at(0) + x * at(1) + y * at(2) - at(3 + i);
+    const double v = at(7) + x * at(8) + y * at(9) - at(10 + i);
+    const double damper = law == DamperLaw::kTanh ? c.damping[i][q] * fastTanh(tanh_rate * v)
+                                                  : c.damping[i][q] * v;
+    // F_K(delta) - F_K(delta - u), expanded so that it is exactly 0 at u = 0.
+    const double spring =
+        u * (c.k[i][q] + c.k3[i][q] * (c.three_delta_sq[i][q] - c.three_delta[i][q] * u + u * u));
+    f[i] = -spring - damper;
     gen[0] += f[i];
-    gen[1] += f[i] * c.x;
-    gen[2] += f[i] * c.y;
+    gen[1] += f[i] * x;
+    gen[2] += f[i] * y;
   }
-  for (int i = 0; i < 7; ++i) d[i] = s[7 + i];
+  for (int i = 0; i < 7; ++i) d[i * stride] = at(7 + i);
   for (int r = 0; r < 3; ++r) {
-    d[7 + r] = p.inv_body_mass(r, 0) * gen[0] + p.inv_body_mass(r, 1) * gen[1] +
-               p.inv_body_mass(r, 2) * gen[2];
+    d[(7 + r) * stride] = c.inv_body_mass[3 * r][q] * gen[0] +
+                          c.inv_body_mass[3 * r + 1][q] * gen[1] +
+                          c.inv_body_mass[3 * r + 2][q] * gen[2];
   }
   for (int i = 0; i < 4; ++i) {
-    d[10 + i] = (p.tyre * (road[i] - s[3 + i]) - f[i]) * p.corner[i].inv_unsprung;
+    d[(10 + i) * stride] = (c.tyre[q] * (road[i] - at(3 + i)) - f[i]) * c.inv_unsprung[i][q];
+  }
+}
+
+// The transposed layout over all n points. Compiled for x86-64-v3 (AVX2 +
+// FMA) and the baseline, chosen at load time; FMA contraction can change the
+// last bits relative to derivatives(), never a point's dependence on the batch.
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void transposedDerivatives(
+    const ConstantPointers& constants, bool tanh_law, double tanh_rate, const double* road,
+    const double* __restrict y, double* __restrict d, Eigen::Index n) {
+  const ConstantPointers c = constants;  // a local copy: its pointers are loop-invariant
+  if (tanh_law) {
+#pragma GCC ivdep
+    for (Eigen::Index q = 0; q < n; ++q) {
+      pointDerivatives<DamperLaw::kTanh>(c, q, tanh_rate, road, y + q, d + q, n);
+    }
+  } else {
+#pragma GCC ivdep
+    for (Eigen::Index q = 0; q < n; ++q) {
+      pointDerivatives<DamperLaw::kLinear>(c, q, tanh_rate, road, y + q, d + q, n);
+    }
   }
 }
 
 class FullCarBatch : public ModelBatch {
  public:
-  FullCarBatch(std::vector<PointConstants> points, DamperLaw law, double tanh_rate,
+  FullCarBatch(PointConstants c, DamperLaw law, double tanh_rate,
                std::shared_ptr<const ContactRoad> road)
-      : points_(std::move(points)), law_(law), tanh_rate_(tanh_rate), road_(std::move(road)) {}
+      : c_(std::move(c)), p_(c_), law_(law), tanh_rate_(tanh_rate), road_(std::move(road)) {}
+  FullCarBatch(const FullCarBatch&) = delete;
+  FullCarBatch& operator=(const FullCarBatch&) = delete;
 
-  int pointCount() const override { return static_cast<int>(points_.size()); }
+  int pointCount() const override { return static_cast<int>(c_.size()); }
 
   Eigen::ArrayXXd initialState() const override {
     return Eigen::ArrayXXd::Zero(14, pointCount());  // the static equilibrium
@@ -76,47 +136,64 @@ class FullCarBatch : public ModelBatch {
     road_->heights(t, road);
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
       if (law_ == DamperLaw::kTanh) {
-        pointDerivatives<DamperLaw::kTanh>(points_[q], tanh_rate_, road.data(), &y(0, q),
-                                           &dydt(0, q));
+        pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road.data(), &y(0, q), &dydt(0, q),
+                                           1);
       } else {
-        pointDerivatives<DamperLaw::kLinear>(points_[q], tanh_rate_, road.data(), &y(0, q),
-                                             &dydt(0, q));
+        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road.data(), &y(0, q),
+                                             &dydt(0, q), 1);
       }
     }
   }
 
+  bool hasTransposedDerivatives() const override { return true; }
+
+  void derivativesTransposed(double t, const Eigen::ArrayXXd& y,
+                             Eigen::ArrayXXd& dydt) const override {
+    const Eigen::Index n = pointCount();
+    if (y.cols() != 14 || y.rows() != n) {
+      throw std::invalid_argument("FullCarModel: transposed batch must be pointCount() x 14");
+    }
+    dydt.resize(n, 14);
+    Eigen::Vector4d road;
+    road_->heights(t, road);
+    transposedDerivatives(p_, law_ == DamperLaw::kTanh, tanh_rate_, road.data(), y.data(),
+                          dydt.data(), n);
+  }
+
  private:
-  std::vector<PointConstants> points_;
+  PointConstants c_;
+  ConstantPointers p_;
   DamperLaw law_;
   double tanh_rate_;
   std::shared_ptr<const ContactRoad> road_;
 };
 
-PointConstants constantsOf(const FullCarParameters& p, const FullCarEquilibrium& e,
-                           double damper_scale) {
-  PointConstants c;
+void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, double damper_scale,
+                  Eigen::Index q, PointConstants& c) {
+  using C = PointConstants;
   for (int i = 0; i < 4; ++i) {
     const int axle = FullCarParameters::axle(i);
-    CornerConstants& k = c.corner[i];
     const double delta = e.spring_compression[i];
-    k.x = p.cornerX(i);
-    k.y = p.cornerY(i);
-    k.k = p.spring_linear[axle];
-    k.k3 = p.spring_cubic[axle];
-    k.three_delta = 3.0 * delta;
-    k.three_delta_sq = 3.0 * delta * delta;
-    k.damping = p.damping[axle] * damper_scale;
-    k.inv_unsprung = 1.0 / p.unsprung_mass[axle];
+    c(q, C::kX + i) = p.cornerX(i);
+    c(q, C::kY + i) = p.cornerY(i);
+    c(q, C::kK + i) = p.spring_linear[axle];
+    c(q, C::kK3 + i) = p.spring_cubic[axle];
+    c(q, C::kThreeDelta + i) = 3.0 * delta;
+    c(q, C::kThreeDeltaSq + i) = 3.0 * delta * delta;
+    c(q, C::kDamping + i) = p.damping[axle] * damper_scale;
+    c(q, C::kInvUnsprung + i) = 1.0 / p.unsprung_mass[axle];
   }
-  c.tyre = p.tyre_stiffness;
+  c(q, C::kTyre) = p.tyre_stiffness;
   // M is a point mass at (x_M, y_M) at the height of O: it moves with z + x_M theta + y_M phi.
   const double m = p.added_mass, xm = p.addedMassX(), ym = p.addedMassY();
   Eigen::Matrix3d mb;
   mb << p.body_mass + m, m * xm, m * ym,
         m * xm, p.pitch_inertia + m * xm * xm, m * xm * ym,
         m * ym, m * xm * ym, p.roll_inertia + m * ym * ym;
-  c.inv_body_mass = mb.inverse();
-  return c;
+  const Eigen::Matrix3d inv = mb.inverse();
+  for (int r = 0; r < 3; ++r) {
+    for (int col = 0; col < 3; ++col) c(q, C::kInvBodyMass + 3 * r + col) = inv(r, col);
+  }
 }
 
 }  // namespace
@@ -192,8 +269,7 @@ std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params)
                                 std::to_string(nominal_vector_.size()) + " parameter rows");
   }
   const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
-  std::vector<PointConstants> points;
-  points.reserve(params.cols());
+  PointConstants points(params.cols());
   for (Eigen::Index q = 0; q < params.cols(); ++q) {
     const std::string prefix = "FullCarModel::prepare: column " + std::to_string(q) + ": ";
     const std::string why = fullCarParameterRuleViolation(params.col(q));
@@ -205,7 +281,7 @@ std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params)
     } catch (const std::runtime_error& error) {
       throw std::invalid_argument(prefix + error.what());
     }
-    points.push_back(constantsOf(p, e, scale));
+    setConstants(p, e, scale, q, points);
   }
   return std::make_unique<FullCarBatch>(std::move(points), nominal_.damper,
                                         nominal_.damper_tanh_rate, road_);

@@ -54,6 +54,7 @@ struct FullCarParameters {
   double damper_tanh_scale = 1.0;  // m/s
   double damper_tanh_rate = 1.0;   // s/m
 
+  double wheelbase() const { return front_axle_distance + rear_axle_distance; }
   // Position of M relative to O.
   double addedMassX() const { return added_mass_x - rear_axle_distance; }
   double addedMassY() const { return added_mass_y - 0.5 * track_width; }

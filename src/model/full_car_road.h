@@ -18,7 +18,7 @@ struct FullCarBumpSettings {
   double flat_length = 1.0;       // m
   double ramp_down_length = 1.0;  // m
   double right_offset = 0.6;      // m of travel before the right wheels reach the bump
-  double wheelbase = 2.6;         // m, a + b of the nominal vehicle
+  double wheelbase = 2.6;         // m: the nominal vehicle's FullCarParameters::wheelbase()
 };
 
 class FullCarBumpRoad : public ContactRoad {

@@ -438,6 +438,86 @@ TEST(FullCarDynamics, MirroredMassMirrorsTheResponse) {
   }
 }
 
+// The model's batch without its transposed form: integrate() then uses derivatives().
+class PlainOnly : public ModelBatch {
+ public:
+  explicit PlainOnly(const ModelBatch& b) : b_(b) {}
+  int pointCount() const override { return b_.pointCount(); }
+  void derivatives(double t, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const override {
+    b_.derivatives(t, y, dydt);
+  }
+  Eigen::ArrayXXd initialState() const override { return b_.initialState(); }
+
+ private:
+  const ModelBatch& b_;
+};
+
+Eigen::MatrixXd spreadColumns(int count, DamperLaw law) {
+  Eigen::MatrixXd params(19, count);
+  for (int q = 0; q < count; ++q) {
+    FullCarParameters p = truth();
+    const double s = static_cast<double>(q) / count;  // 0 .. 1
+    p.added_mass = 50.0 + 250.0 * s;
+    p.added_mass_x = 2.6 * s;
+    p.added_mass_y = 1.5 * (1.0 - s);
+    p.damping[1] *= 0.8 + 0.4 * s;
+    p.spring_linear[0] *= 1.2 - 0.4 * s;
+    p.spring_cubic[1] = law == DamperLaw::kLinear ? 0.0 : 1e5 * (1.0 + s);
+    params.col(q) = p.toVector();
+  }
+  return params;
+}
+
+TEST(FullCarDynamics, TransposedDerivativesEqualPlain) {
+  for (DamperLaw law : {DamperLaw::kTanh, DamperLaw::kLinear}) {
+    FullCarParameters nominal;
+    nominal.damper = law;
+    const FullCarModel model(nominal, bumpRoad());
+    const int n = 37;  // not a multiple of the vector width: the remainder loop too
+    const auto batch = model.prepare(spreadColumns(n, law));
+    ASSERT_TRUE(batch->hasTransposedDerivatives());
+    // Derivatives at arbitrary states (large rates: both tanh branches).
+    Eigen::ArrayXXd y = Eigen::ArrayXXd::Random(14, n) * 0.05;
+    y.bottomRows(7) *= 20.0;
+    Eigen::ArrayXXd plain, transposed;
+    double worst = 0.0;
+    for (double t : {0.1, 0.4, 0.9}) {
+      batch->derivatives(t, y, plain);
+      batch->derivativesTransposed(t, y.transpose(), transposed);
+      ASSERT_EQ(transposed.rows(), n);
+      for (int i = 0; i < 14; ++i) {
+        const double scale = plain.row(i).abs().maxCoeff();
+        ASSERT_GT(scale, 0.0);
+        worst = std::max(worst, (transposed.col(i).transpose() - plain.row(i)).abs().maxCoeff() /
+                                    scale);
+      }
+    }
+    // Integrated over the bump, the two layouts agree to rounding.
+    const PlainOnly plain_batch(*batch);
+    Eigen::ArrayXXd y_soa = batch->initialState(), y_plain = plain_batch.initialState();
+    const IntegratorSettings settings{1e-3, IntegrationMethod::kRk4};
+    integrate(model, *batch, 0.0, 3.0, y_soa, settings);
+    integrate(model, plain_batch, 0.0, 3.0, y_plain, settings);
+    const double integrated = (y_soa - y_plain).abs().maxCoeff() / y_plain.abs().maxCoeff();
+    std::printf("%s: derivatives differ by %.2e, states after 3 s by %.2e (relative)\n",
+                law == DamperLaw::kTanh ? "tanh" : "linear", worst, integrated);
+    EXPECT_LT(worst, 1e-14);
+    EXPECT_LT(integrated, 1e-12);
+    // And each column alone gives what it gives in the batch.
+    double alone = 0.0;
+    for (int q : {0, 5, n - 1}) {
+      const Eigen::MatrixXd column = spreadColumns(n, law).col(q);
+      const auto single = model.prepare(column);
+      Eigen::ArrayXXd y1 = single->initialState();
+      integrate(model, *single, 0.0, 3.0, y1, settings);
+      alone = std::max(alone, (y1.col(0) - y_soa.col(q)).abs().maxCoeff() /
+                                  y_soa.col(q).abs().maxCoeff());
+    }
+    std::printf("  single column against the batch: %.2e\n", alone);
+    EXPECT_LT(alone, 1e-12);
+  }
+}
+
 TEST(FullCarBumpRoad, HeightsAndKinks) {
   const FullCarBumpRoad road{FullCarBumpSettings()};
   EXPECT_EQ(road.contactCount(), 4);
