@@ -73,8 +73,7 @@ Vector7 residuals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
 
 [[noreturn]] void fail(const std::string& why, int iterations) {
   std::ostringstream os;
-  os << "full-car static equilibrium: " << why << " after " << iterations
-     << " Newton iterations";
+  os << "full-car static equilibrium: " << why << " after " << iterations << " Newton iterations";
   throw std::runtime_error(os.str());
 }
 

@@ -16,16 +16,16 @@ namespace {
 // parameter work and the transposed loop over the points can vectorise.
 struct PointConstants {
   enum Column {
-    kX = 0,                // corner position relative to O, 4 each
+    kX = 0,  // corner position relative to O, 4 each
     kY = 4,
-    kK = 8,                // spring law about the static compression delta
+    kK = 8,  // spring law about the static compression delta
     kK3 = 12,
     kThreeDelta = 16,
     kThreeDeltaSq = 20,
-    kDamping = 24,         // c (linear) or c * tanh scale
+    kDamping = 24,  // c (linear) or c * tanh scale
     kInvUnsprung = 28,
     kTyre = 32,
-    kInvBodyMass = 33,     // M_b^-1, row-major 3 x 3
+    kInvBodyMass = 33,  // M_b^-1, row-major 3 x 3
     kCount = 42
   };
   Eigen::ArrayXXd table;
@@ -72,8 +72,8 @@ __attribute__((always_inline)) inline void pointDerivatives(const ConstantPointe
     const double x = c.x[i][q], y = c.y[i][q];
     const double u = at(0) + x * at(1) + y * at(2) - at(3 + i);
     const double v = at(7) + x * at(8) + y * at(9) - at(10 + i);
-    const double damper = law == DamperLaw::kTanh ? c.damping[i][q] * fastTanh(tanh_rate * v)
-                                                  : c.damping[i][q] * v;
+    const double damper =
+        law == DamperLaw::kTanh ? c.damping[i][q] * fastTanh(tanh_rate * v) : c.damping[i][q] * v;
     // F_K(delta) - F_K(delta - u), expanded so that it is exactly 0 at u = 0.
     const double spring =
         u * (c.k[i][q] + c.k3[i][q] * (c.three_delta_sq[i][q] - c.three_delta[i][q] * u + u * u));
@@ -139,8 +139,8 @@ class FullCarBatch : public ModelBatch {
         pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road.data(), &y(0, q), &dydt(0, q),
                                            1);
       } else {
-        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road.data(), &y(0, q),
-                                             &dydt(0, q), 1);
+        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road.data(), &y(0, q), &dydt(0, q),
+                                             1);
       }
     }
   }
@@ -187,9 +187,11 @@ void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, doubl
   // M is a point mass at (x_M, y_M) at the height of O: it moves with z + x_M theta + y_M phi.
   const double m = p.added_mass, xm = p.addedMassX(), ym = p.addedMassY();
   Eigen::Matrix3d mb;
-  mb << p.body_mass + m, m * xm, m * ym,
-        m * xm, p.pitch_inertia + m * xm * xm, m * xm * ym,
-        m * ym, m * xm * ym, p.roll_inertia + m * ym * ym;
+  // clang-format off
+  mb << p.body_mass + m, m * xm,                        m * ym,
+        m * xm,          p.pitch_inertia + m * xm * xm, m * xm * ym,
+        m * ym,          m * xm * ym,                   p.roll_inertia + m * ym * ym;
+  // clang-format on
   const Eigen::Matrix3d inv = mb.inverse();
   for (int r = 0; r < 3; ++r) {
     for (int col = 0; col < 3; ++col) c(q, C::kInvBodyMass + 3 * r + col) = inv(r, col);

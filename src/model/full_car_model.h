@@ -34,17 +34,17 @@ namespace pc_ekf {
 //   added_mass, added_mass_x, added_mass_y
 // Unsprung masses, springs and dampers are per wheel/corner.
 struct FullCarParameters {
-  double body_mass = 1200.0;        // m_s, kg
-  double roll_inertia = 400.0;      // I_xx about O, kg m^2
-  double pitch_inertia = 1600.0;    // I_yy about O, kg m^2
-  double front_axle_distance = 1.1; // a, O to the front axle, m
-  double rear_axle_distance = 1.5;  // b, O to the rear axle, m
-  double track_width = 1.5;         // w, m
-  double unsprung_mass[2] = {40.0, 35.0};        // front, rear
-  double spring_linear[2] = {20000.0, 22000.0};  // N/m
-  double spring_cubic[2] = {100000.0, 100000.0}; // N/m^3
-  double damping[2] = {1500.0, 1400.0};          // N s/m
-  double tyre_stiffness = 200000.0;              // N/m, all four
+  double body_mass = 1200.0;                      // m_s, kg
+  double roll_inertia = 400.0;                    // I_xx about O, kg m^2
+  double pitch_inertia = 1600.0;                  // I_yy about O, kg m^2
+  double front_axle_distance = 1.1;               // a, O to the front axle, m
+  double rear_axle_distance = 1.5;                // b, O to the rear axle, m
+  double track_width = 1.5;                       // w, m
+  double unsprung_mass[2] = {40.0, 35.0};         // front, rear
+  double spring_linear[2] = {20000.0, 22000.0};   // N/m
+  double spring_cubic[2] = {100000.0, 100000.0};  // N/m^3
+  double damping[2] = {1500.0, 1400.0};           // N s/m
+  double tyre_stiffness = 200000.0;               // N/m, all four
   double gravity = 9.81;
   double added_mass = 200.0;   // M, kg
   double added_mass_x = 1.3;   // forward of the rear axle, m

@@ -26,22 +26,20 @@ std::string outOfDomain(const std::string& name, double value, const std::string
 
 const std::vector<std::string>& fullCarParameterNames() {
   static const std::vector<std::string> names = {
-      "body_mass",          "roll_inertia",        "pitch_inertia",
-      "front_axle_distance", "rear_axle_distance", "track_width",
-      "unsprung_mass_front", "unsprung_mass_rear", "spring_linear_front",
-      "spring_linear_rear", "spring_cubic_front",  "spring_cubic_rear",
-      "damping_front",      "damping_rear",        "tyre_stiffness",
-      "gravity",            "added_mass",          "added_mass_x",
-      "added_mass_y"};
+      "body_mass",           "roll_inertia",       "pitch_inertia",       "front_axle_distance",
+      "rear_axle_distance",  "track_width",        "unsprung_mass_front", "unsprung_mass_rear",
+      "spring_linear_front", "spring_linear_rear", "spring_cubic_front",  "spring_cubic_rear",
+      "damping_front",       "damping_rear",       "tyre_stiffness",      "gravity",
+      "added_mass",          "added_mass_x",       "added_mass_y"};
   return names;
 }
 
 Eigen::VectorXd FullCarParameters::toVector() const {
   Eigen::VectorXd v(kCount);
-  v << body_mass, roll_inertia, pitch_inertia, front_axle_distance, rear_axle_distance,
-      track_width, unsprung_mass[0], unsprung_mass[1], spring_linear[0], spring_linear[1],
-      spring_cubic[0], spring_cubic[1], damping[0], damping[1], tyre_stiffness, gravity,
-      added_mass, added_mass_x, added_mass_y;
+  v << body_mass, roll_inertia, pitch_inertia, front_axle_distance, rear_axle_distance, track_width,
+      unsprung_mass[0], unsprung_mass[1], spring_linear[0], spring_linear[1], spring_cubic[0],
+      spring_cubic[1], damping[0], damping[1], tyre_stiffness, gravity, added_mass, added_mass_x,
+      added_mass_y;
   return v;
 }
 

@@ -7,8 +7,8 @@
 namespace pc_ekf {
 
 FullCarBumpRoad::FullCarBumpRoad(const FullCarBumpSettings& s) : s_(s) {
-  const double values[] = {s.speed_kmh,       s.height_left,  s.height_right, s.ramp_up_length,
-                           s.flat_length,     s.ramp_down_length, s.right_offset, s.wheelbase};
+  const double values[] = {s.speed_kmh,   s.height_left,      s.height_right, s.ramp_up_length,
+                           s.flat_length, s.ramp_down_length, s.right_offset, s.wheelbase};
   for (double v : values) {
     if (!std::isfinite(v)) throw std::invalid_argument("FullCarBumpRoad: non-finite setting");
   }

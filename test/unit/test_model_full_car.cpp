@@ -279,9 +279,10 @@ TEST(FullCarDynamics, BumpConvergesUnderStepRefinement) {
       const double e_rk4 = channelDiff(z_rk4, z_fine, c, q) / scale;
       const double e_half = channelDiff(z_rk4_half, z_fine, c, q) / scale;
       const double e_dp5 = channelDiff(z_dp5, z_fine, c, q) / scale;
-      std::printf("point %d %s: max %.4g, relative error rk4 1 ms %.2e, 0.5 ms %.2e (ratio %.1f), "
-                  "dp5 3 ms %.2e\n",
-                  q, model.channelNames()[c].c_str(), scale, e_rk4, e_half, e_rk4 / e_half, e_dp5);
+      std::printf(
+          "point %d %s: max %.4g, relative error rk4 1 ms %.2e, 0.5 ms %.2e (ratio %.1f), "
+          "dp5 3 ms %.2e\n",
+          q, model.channelNames()[c].c_str(), scale, e_rk4, e_half, e_rk4 / e_half, e_dp5);
       EXPECT_LT(e_rk4, 1e-6);
       EXPECT_LT(e_dp5, 1e-6);
       EXPECT_NEAR(e_rk4 / e_half, 16.0, 4.0);  // fourth order
@@ -313,8 +314,8 @@ Eigen::Matrix<double, 16, 16> augmentedSystem(const FullCarParameters& p) {
   a.block<7, 7>(0, 7).setIdentity();
   const double m = p.added_mass, xm = p.addedMassX(), ym = p.addedMassY();
   Eigen::Matrix3d mb;
-  mb << p.body_mass + m, m * xm, m * ym, m * xm, p.pitch_inertia + m * xm * xm, m * xm * ym,
-      m * ym, m * xm * ym, p.roll_inertia + m * ym * ym;
+  mb << p.body_mass + m, m * xm, m * ym, m * xm, p.pitch_inertia + m * xm * xm, m * xm * ym, m * ym,
+      m * xm * ym, p.roll_inertia + m * ym * ym;
   Eigen::Matrix<double, 3, 16> gen = Eigen::Matrix<double, 3, 16>::Zero();
   for (int i = 0; i < 4; ++i) {
     const int axle = i / 2;
@@ -353,7 +354,8 @@ void expectMatchesExponential(const FullCarParameters& p, const char* label) {
   exact[15] = 1.0;  // cos(0)
   Eigen::Matrix<double, 14, 10> got, want;
   for (int k = 0; k < 10; ++k) {
-    integrate(model, *batch, 0.3 * k, 0.3 * (k + 1), y, IntegratorSettings{1e-4, IntegrationMethod::kRk4});
+    integrate(model, *batch, 0.3 * k, 0.3 * (k + 1), y,
+              IntegratorSettings{1e-4, IntegrationMethod::kRk4});
     exact = step * exact;
     got.col(k) = y.matrix();
     want.col(k) = exact.head<14>();
@@ -408,8 +410,9 @@ TEST(FullCarDynamics, CentredMassOnSymmetricBumpNeverRolls) {
       wheel = std::max(wheel, std::abs(y(3, q)));
     }
   }
-  std::printf("max |z| %.3e, |theta| %.3e, |zu_fl| %.3e; worst roll or left-right difference %.2e\n",
-              heave, pitch, wheel, worst);
+  std::printf(
+      "max |z| %.3e, |theta| %.3e, |zu_fl| %.3e; worst roll or left-right difference %.2e\n", heave,
+      pitch, wheel, worst);
   EXPECT_GT(heave, 1e-2);
   EXPECT_GT(pitch, 1e-3);
   EXPECT_LT(worst, 1e-13);
@@ -488,8 +491,8 @@ TEST(FullCarDynamics, TransposedDerivativesEqualPlain) {
       for (int i = 0; i < 14; ++i) {
         const double scale = plain.row(i).abs().maxCoeff();
         ASSERT_GT(scale, 0.0);
-        worst = std::max(worst, (transposed.col(i).transpose() - plain.row(i)).abs().maxCoeff() /
-                                    scale);
+        worst = std::max(worst,
+                         (transposed.col(i).transpose() - plain.row(i)).abs().maxCoeff() / scale);
       }
     }
     // Integrated over the bump, the two layouts agree to rounding.
@@ -510,8 +513,8 @@ TEST(FullCarDynamics, TransposedDerivativesEqualPlain) {
       const auto single = model.prepare(column);
       Eigen::ArrayXXd y1 = single->initialState();
       integrate(model, *single, 0.0, 3.0, y1, settings);
-      alone = std::max(alone, (y1.col(0) - y_soa.col(q)).abs().maxCoeff() /
-                                  y_soa.col(q).abs().maxCoeff());
+      alone = std::max(alone,
+                       (y1.col(0) - y_soa.col(q)).abs().maxCoeff() / y_soa.col(q).abs().maxCoeff());
     }
     std::printf("  single column against the batch: %.2e\n", alone);
     EXPECT_LT(alone, 1e-12);
