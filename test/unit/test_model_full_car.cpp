@@ -103,6 +103,10 @@ TEST(FullCarEquilibrium, ResidualsBelow1e9) {
   p.spring_linear[0] = 5000.0;  // soft and strongly cubic
   p.spring_cubic[1] = 5e6;
   sets.push_back(p);
+  p = truth();  // nearly pure cubic: the linear start is far off, the line search works
+  p.spring_linear[0] = p.spring_linear[1] = 100.0;
+  p.spring_cubic[0] = p.spring_cubic[1] = 1e12;
+  sets.push_back(p);
   const std::vector<FullCarEquilibrium> batch = solveFullCarEquilibria(sets);
   ASSERT_EQ(batch.size(), sets.size());
   for (std::size_t j = 0; j < sets.size(); ++j) {
@@ -128,6 +132,13 @@ TEST(FullCarEquilibrium, TruthValues) {
     std::printf("  corner %d: zu %.12f delta %.12f load %.9f\n", i, e.wheel_height[i],
                 e.spring_compression[i], e.load[i]);
   }
+  // From a separate scipy fsolve of the same seven equations.
+  EXPECT_NEAR(e.heave, -0.17267450974136103, 1e-12);
+  EXPECT_NEAR(e.pitch, -0.015843245885482134, 1e-12);
+  EXPECT_NEAR(e.roll, -0.0022382988762504647, 1e-12);
+  const double zu[4] = {-0.021463947106607435, -0.02104450171858487, -0.017530913255892563,
+                        -0.017129040918915133};
+  for (int i = 0; i < 4; ++i) EXPECT_NEAR(e.wheel_height[i], zu[i], 1e-12);
   // M sits behind O (x_M = 1.3 * 0.845 - 1.5 < 0) and left of it: rear and left sink.
   EXPECT_LT(p.addedMassX(), 0.0);
   EXPECT_GT(p.addedMassY(), 0.0);
