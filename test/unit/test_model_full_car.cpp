@@ -132,7 +132,7 @@ TEST(FullCarEquilibrium, TruthValues) {
     std::printf("  corner %d: zu %.12f delta %.12f load %.9f\n", i, e.wheel_height[i],
                 e.spring_compression[i], e.load[i]);
   }
-  // From a separate scipy fsolve of the same seven equations.
+  // From a separate scipy fsolve of the same seven equations (full_car_reference.py).
   EXPECT_NEAR(e.heave, -0.17267450974136103, 1e-12);
   EXPECT_NEAR(e.pitch, -0.015843245885482134, 1e-12);
   EXPECT_NEAR(e.roll, -0.0022382988762504647, 1e-12);
@@ -306,7 +306,8 @@ TEST(FullCarDynamics, BumpConvergesUnderStepRefinement) {
 
 TEST(FullCarDynamics, TruthBumpResponseMatchesSeparateReference) {
   // Channels at t = 0.3, 1.5 and 3 s from a separate numpy implementation of
-  // the same equations (scipy DOP853, rtol 1e-13, restarted at every kink).
+  // the same equations (full_car_reference.py: scipy DOP853, rtol 1e-13,
+  // restarted at every kink).
   const double want[3][8] = {
       {-0.006517646159082735, -0.01148796081914024, 0.015609368256010942, -0.026030324701126085,
        0.30167712848083306, 0.12204766229098946, -0.021603189133061272, 0.025267856630915877},
