@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Separate numpy/scipy implementation of the full-car ride model at the truth
 parameters: prints the static equilibrium and the channels at t = 0.3, 1.5 and
-3 s of the bump that test_model_full_car.cpp compares against."""
+3 s of the bump that test_model_full_car.cpp compares against. Run by hand
+(needs python3-scipy, which the build does not)."""
 import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import fsolve
