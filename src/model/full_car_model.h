@@ -12,8 +12,9 @@
 // State (deviations from the static equilibrium):
 //   [z, theta, phi, zu_fl, zu_fr, zu_rl, zu_rr, and their rates] (14)
 // Channels: u_fl u_fr u_rl u_rr (suspension extension z_i - zu_i) and their
-// rates v_fl .. v_rr. The observation matrix uses the nominal geometry (a, b,
-// w); for points whose geometry differs from it, it is exact only at rest.
+// rates v_fl .. v_rr. The observation matrix is fixed, so it uses the nominal
+// geometry (a, b, w): for a point whose a, b or w differ from the nominal,
+// H y is not that point's own extension once the body pitches or rolls.
 #pragma once
 
 #include <memory>
