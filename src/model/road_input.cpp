@@ -45,17 +45,20 @@ SpeedBumpRoad::SpeedBumpRoad(const SpeedBumpSettings& s) : s_(s) {
   }
 }
 
+double unitTrapezoid(double d, double up, double flat, double down) {
+  const double top = up + flat;
+  const double total = top + down;
+  if (d <= 0.0 || d >= total) return 0.0;
+  if (d < up) return d / up;
+  if (d <= top) return 1.0;
+  return (total - d) / down;
+}
+
 Eigen::Vector2d SpeedBumpRoad::height(double t) const {
   const double travel = s_.speed_kmh / 3.6 * t - s_.start_distance;
-  const double up = s_.ramp_up_length;
-  const double top = up + s_.flat_length;
-  const double total = top + s_.ramp_down_length;
-  // Unit-height trapezoid at travel d past the bump's start; zero-length ramps are steps.
+  const double total = s_.ramp_up_length + s_.flat_length + s_.ramp_down_length;
   const auto shape = [&](double d) {
-    if (d <= 0.0 || d >= total) return 0.0;
-    if (d < up) return d / up;
-    if (d <= top) return 1.0;
-    return (total - d) / s_.ramp_down_length;
+    return unitTrapezoid(d, s_.ramp_up_length, s_.flat_length, s_.ramp_down_length);
   };
   return {s_.height_left * shape(travel),
           s_.height_right * shape(travel - s_.delay_fraction * total)};

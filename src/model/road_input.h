@@ -40,6 +40,10 @@ struct SpeedBumpSettings {
   double start_distance = 0.0;   // m of travel before tyre 1 reaches the bump
 };
 
+// Unit-height trapezoid at travel d past its start: ramp up over `up`, flat
+// over `flat`, ramp down over `down`; 0 outside; zero-length ramps are steps.
+double unitTrapezoid(double d, double up, double flat, double down);
+
 // Trapezoid bump seen by both tyres, tyre 2 delayed (SPEC §1.5).
 class SpeedBumpRoad : public RoadInput {
  public:

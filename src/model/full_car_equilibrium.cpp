@@ -1,0 +1,148 @@
+// Static equilibrium of the full car: statically indeterminate (four corners,
+// three body equations), so the body pose and the wheel heights are solved
+// together. Unknowns X = [z_s, theta_s, phi_s, zu_fl, zu_fr, zu_rl, zu_rr].
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+#include "model/full_car_model.h"
+
+namespace pc_ekf {
+
+namespace {
+
+using Vector7 = Eigen::Matrix<double, 7, 1>;
+using Matrix7 = Eigen::Matrix<double, 7, 7>;
+
+struct Setup {
+  double x[4], y[4], k[4], k3[4], unsprung_weight[4];
+  double tyre;
+  double body_load[3];  // g [m_s + M, M x_M, M y_M]
+};
+
+Setup setupOf(const FullCarParameters& p) {
+  Setup s;
+  for (int c = 0; c < 4; ++c) {
+    const int axle = FullCarParameters::axle(c);
+    s.x[c] = p.cornerX(c);
+    s.y[c] = p.cornerY(c);
+    s.k[c] = p.spring_linear[axle];
+    s.k3[c] = p.spring_cubic[axle];
+    s.unsprung_weight[c] = p.unsprung_mass[axle] * p.gravity;
+  }
+  s.tyre = p.tyre_stiffness;
+  const double m = p.added_mass;
+  s.body_load[0] = (p.body_mass + m) * p.gravity;
+  s.body_load[1] = m * p.addedMassX() * p.gravity;
+  s.body_load[2] = m * p.addedMassY() * p.gravity;
+  return s;
+}
+
+double compression(const Setup& s, const Vector7& x, int c) {
+  return x[3 + c] - (x[0] + s.x[c] * x[1] + s.y[c] * x[2]);
+}
+
+// Residuals R(X) (body force and moments, then the wheels) and, when j is
+// given, their Jacobian. cubic = false drops k3 (the linear start).
+Vector7 residuals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
+  Vector7 r;
+  for (int i = 0; i < 3; ++i) r[i] = -s.body_load[i];
+  if (j) j->setZero();
+  for (int c = 0; c < 4; ++c) {
+    const double d = compression(s, x, c);
+    const double k3 = cubic ? s.k3[c] : 0.0;
+    const double force = s.k[c] * d + k3 * d * d * d;
+    const double lever[3] = {1.0, s.x[c], s.y[c]};
+    for (int i = 0; i < 3; ++i) r[i] += force * lever[i];
+    r[3 + c] = force + s.unsprung_weight[c] + s.tyre * x[3 + c];
+    if (!j) continue;
+    const double slope = s.k[c] + 3.0 * k3 * d * d;
+    // d delta_c / dX = [-1, -x_c, -y_c, e_c]
+    double dd[7] = {-1.0, -s.x[c], -s.y[c], 0.0, 0.0, 0.0, 0.0};
+    dd[3 + c] = 1.0;
+    for (int col = 0; col < 7; ++col) {
+      for (int i = 0; i < 3; ++i) (*j)(i, col) += slope * lever[i] * dd[col];
+      (*j)(3 + c, col) += slope * dd[col];
+    }
+    (*j)(3 + c, 3 + c) += s.tyre;
+  }
+  return r;
+}
+
+[[noreturn]] void fail(const std::string& why, int iterations) {
+  std::ostringstream os;
+  os << "full-car static equilibrium: " << why << " after " << iterations << " Newton iterations";
+  throw std::runtime_error(os.str());
+}
+
+FullCarEquilibrium solve(const FullCarParameters& p) {
+  const Setup s = setupOf(p);
+  Matrix7 j;
+  // Linear springs: R is affine, so one solve from 0 is exact.
+  const Vector7 zero = Vector7::Zero();
+  const Vector7 r0 = residuals(s, zero, false, &j);
+  Vector7 x = -j.fullPivLu().solve(r0);
+  if (!x.allFinite()) fail("non-finite linear-spring solution", 0);
+  int it = 0;
+  bool converged = false;
+  constexpr int kMaxIterations = 100;
+  while (!converged) {
+    if (it == kMaxIterations) fail("no convergence", it);
+    const Vector7 r = residuals(s, x, true, &j);
+    if (!r.allFinite()) fail("non-finite residual", it);
+    const Vector7 step = -j.fullPivLu().solve(r);
+    if (!step.allFinite()) fail("non-finite Newton step", it);
+    ++it;
+    const double scale = std::max(x.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
+    if (step.cwiseAbs().maxCoeff() <= 1e-12 * scale) {
+      x += step;  // quadratic convergence: what remains is round-off
+      converged = true;
+      continue;
+    }
+    if (step.cwiseAbs().maxCoeff() <= 1e-8 * scale) {
+      x += step;  // close: the residual may already be at round-off
+      continue;
+    }
+    // Halve the step until the residual decreases (the cubic springs can make
+    // a full step overshoot far from the solution).
+    const double norm = r.norm();
+    double lambda = 1.0;
+    for (;;) {
+      const Vector7 trial = x + lambda * step;
+      const double trial_norm = residuals(s, trial, true, nullptr).norm();
+      if (trial_norm < norm) {
+        x = trial;
+        break;
+      }
+      lambda *= 0.5;
+      if (lambda < 1e-12) fail("line search stalled", it);
+    }
+  }
+  FullCarEquilibrium e;
+  e.heave = x[0];
+  e.pitch = x[1];
+  e.roll = x[2];
+  e.iterations = it;
+  for (int c = 0; c < 4; ++c) {
+    const double d = compression(s, x, c);
+    e.wheel_height[c] = x[3 + c];
+    e.spring_compression[c] = d;
+    e.load[c] = s.k[c] * d + s.k3[c] * d * d * d;
+  }
+  return e;
+}
+
+}  // namespace
+
+FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p) { return solve(p); }
+
+std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps) {
+  std::vector<FullCarEquilibrium> out;
+  out.reserve(ps.size());
+  for (const FullCarParameters& p : ps) out.push_back(solve(p));
+  return out;
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,123 @@
+// Full-car 7-DOF ride model: a rigid body (heave, pitch, roll) on four
+// corners, each an unsprung mass on a tyre, with an added point mass M.
+//
+// Axes: x forward, y left, z up; heights are deviations, up positive.
+//   theta > 0 raises the front: it is minus the right-handed pitch about a
+//     left-pointing y axis.
+//   phi > 0 raises the left side: right-handed roll about x.
+// Small angles: corner i at (x_i, y_i) from the body's centre O is at height
+// z + x_i theta + y_i phi. Corners in the order front_left, front_right,
+// rear_left, rear_right at (a, w/2), (a, -w/2), (-b, w/2), (-b, -w/2).
+//
+// State (deviations from the static equilibrium):
+//   [z, theta, phi, zu_fl, zu_fr, zu_rl, zu_rr, and their rates] (14)
+// Channels: u_fl u_fr u_rl u_rr (suspension extension z_i - zu_i) and their
+// rates v_fl .. v_rr. The observation matrix is fixed, so it uses the nominal
+// geometry (a, b, w): for a point whose a, b or w differ from the nominal,
+// H y is not that point's own extension once the body pitches or rolls.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "model/mechanical_model.h"
+#include "model/road_input.h"
+#include "model/roll_plane_model.h"  // DamperLaw
+
+namespace pc_ekf {
+
+// Parameter vector, in order (fullCarParameterNames()):
+//   body_mass, roll_inertia, pitch_inertia, front_axle_distance,
+//   rear_axle_distance, track_width, unsprung_mass_front, unsprung_mass_rear,
+//   spring_linear_front, spring_linear_rear, spring_cubic_front,
+//   spring_cubic_rear, damping_front, damping_rear, tyre_stiffness, gravity,
+//   added_mass, added_mass_x, added_mass_y
+// Unsprung masses, springs and dampers are per wheel/corner.
+struct FullCarParameters {
+  double body_mass = 1200.0;                      // m_s, kg
+  double roll_inertia = 400.0;                    // I_xx about O, kg m^2
+  double pitch_inertia = 1600.0;                  // I_yy about O, kg m^2
+  double front_axle_distance = 1.1;               // a, O to the front axle, m
+  double rear_axle_distance = 1.5;                // b, O to the rear axle, m
+  double track_width = 1.5;                       // w, m
+  double unsprung_mass[2] = {40.0, 35.0};         // front, rear
+  double spring_linear[2] = {20000.0, 22000.0};   // N/m
+  double spring_cubic[2] = {100000.0, 100000.0};  // N/m^3
+  double damping[2] = {1500.0, 1400.0};           // N s/m
+  double tyre_stiffness = 200000.0;               // N/m, all four
+  double gravity = 9.81;
+  double added_mass = 200.0;   // M, kg
+  double added_mass_x = 1.3;   // forward of the rear axle, m
+  double added_mass_y = 0.75;  // left of the right wheels' line, m
+  // Not in the vector: F_C = c * scale * tanh(rate * v), or F_C = c v.
+  DamperLaw damper = DamperLaw::kTanh;
+  double damper_tanh_scale = 1.0;  // m/s
+  double damper_tanh_rate = 1.0;   // s/m
+
+  double wheelbase() const { return front_axle_distance + rear_axle_distance; }
+  // Position of M relative to O.
+  double addedMassX() const { return added_mass_x - rear_axle_distance; }
+  double addedMassY() const { return added_mass_y - 0.5 * track_width; }
+  // Corner c (0 fl, 1 fr, 2 rl, 3 rr) relative to O.
+  double cornerX(int c) const { return c < 2 ? front_axle_distance : -rear_axle_distance; }
+  double cornerY(int c) const { return c % 2 == 0 ? 0.5 * track_width : -0.5 * track_width; }
+  // Axle (0 front, 1 rear) of corner c.
+  static int axle(int c) { return c / 2; }
+
+  Eigen::VectorXd toVector() const;
+  // Damper law and tanh constants come from `laws`.
+  static FullCarParameters fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
+                                      const FullCarParameters& laws);
+};
+
+const std::vector<std::string>& fullCarParameterNames();
+
+// "" when admissible by the parameter rules alone (finite, positive masses,
+// inertias, lengths, stiffnesses and gravity; damping and cubic stiffness >= 0;
+// M >= 0; 0 <= added_mass_x <= a + b; 0 <= added_mass_y <= w), else why not.
+// FullCarModel::invalidReason also requires the equilibrium to converge.
+std::string fullCarParameterRuleViolation(const Eigen::Ref<const Eigen::VectorXd>& params);
+
+// Static equilibrium, heights from the unloaded geometry (springs at free
+// length, tyres just touching).
+struct FullCarEquilibrium {
+  double heave = 0.0, pitch = 0.0, roll = 0.0;  // z_s, theta_s, phi_s of O
+  double wheel_height[4] = {0, 0, 0, 0};        // zu_i (= -tyre compression)
+  double spring_compression[4] = {0, 0, 0, 0};  // delta_i = zu_i - corner height
+  double load[4] = {0, 0, 0, 0};                // F_K,i(delta_i), N
+  int iterations = 0;                           // Newton steps after the linear start
+};
+// Newton from the linear-spring solution; throws std::runtime_error when it
+// fails to converge.
+FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p);
+std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps);
+
+class FullCarModel : public MechanicalModel {
+ public:
+  // road: 4 contacts (front_left, front_right, rear_left, rear_right), else
+  // std::invalid_argument.
+  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road);
+
+  int stateSize() const override { return 14; }
+  const std::vector<std::string>& stateNames() const override;
+  const std::vector<std::string>& parameterNames() const override;
+  const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
+  std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const override;
+  const std::vector<std::string>& channelNames() const override;
+  const Eigen::MatrixXd& observationMatrix() const override { return h_; }
+  std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+
+  static const std::vector<std::string>& contactNames();
+  const FullCarParameters& nominal() const { return nominal_; }
+  const ContactRoad& road() const { return *road_; }
+
+ private:
+  FullCarParameters nominal_;
+  Eigen::VectorXd nominal_vector_;
+  Eigen::MatrixXd h_;
+  std::shared_ptr<const ContactRoad> road_;
+};
+
+}  // namespace pc_ekf
