@@ -3,7 +3,7 @@
 namespace pc_ekf {
 
 ModelRegistry::ModelRegistry() {
-  for (auto t : {rollPlaneType()}) builtin_[t->name()] = t;
+  for (auto t : {rollPlaneType(), fullCarType()}) builtin_[t->name()] = t;
 }
 
 const ModelRegistry& ModelRegistry::builtins() {

@@ -112,6 +112,7 @@ class FullCarModel : public MechanicalModel {
   static const std::vector<std::string>& contactNames();
   const FullCarParameters& nominal() const { return nominal_; }
   const ContactRoad& road() const { return *road_; }
+  const ContactRoad* contactRoad() const override { return road_.get(); }
 
  private:
   FullCarParameters nominal_;

@@ -66,6 +66,11 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
       pnh_(pnh),
       timeline_(timelineSettings(config_)),
       diagnostics_(nh, pnh, name, config_) {
+  if (!config_.model_type->twoContacts()) {
+    throw ConfigError(config_.source + ": key 'model.type': estimator_node takes two-suspension "
+                      "models (road/profile, two joints) so far; " + config_.model_type->name() +
+                      " runs in estimate_offline");
+  }
   joints_.left = config_.node.left_joint;
   joints_.right = config_.node.right_joint;
   // Built now so that a bad road file or collocation design is a start-up error.

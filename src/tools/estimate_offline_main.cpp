@@ -40,6 +40,11 @@ int main(int argc, char** argv) {
     // A bag supplies the road (replacing the config's) and the samples.
     std::shared_ptr<const RoadInput> bag_road;
     MeasurementSeries series;
+    if (args.has("--bag") && !config.model_type->twoContacts()) {
+      return args.badInput(config.source + ": model " + config.model_type->name() +
+                           ": bags carry two suspensions (road/profile); give --measurements "
+                           "(CSV with the model's channels) or no data file");
+    }
     if (args.has("--bag")) {
       BagRecord bag = readBag(args["--bag"]);
       for (std::size_t i = 0; i < bag.warnings.size() && i < 5; ++i) {
@@ -52,7 +57,9 @@ int main(int argc, char** argv) {
       series = std::move(bag.samples);
     }
     const auto model = makeModel(config, makeRoad(config, bag_road));
-    if (args.has("--measurements")) series = readMeasurementCsvFile(args["--measurements"]);
+    if (args.has("--measurements")) {
+      series = readMeasurementCsvFile(args["--measurements"], config.model_type->channelNames());
+    }
     if (!args.has("--measurements") && !args.has("--bag")) {
       series = synthesizeFromConfig(config, *model, seed);
     }

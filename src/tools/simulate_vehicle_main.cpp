@@ -1,5 +1,5 @@
 // simulate_vehicle: static equilibrium and noise-free response of the
-// roll-plane model at the nominal and the true parameters of a config
+// config's model at the nominal and the true parameters
 // (a quick look at the model without any estimator). The truth includes
 // truth.vehicle and truth.schedule (not the sensor or timing imperfections).
 #include <cmath>
@@ -9,14 +9,33 @@
 
 #include "filter/trajectory_simulation.h"
 #include "io/estimation_setup.h"
+#include "model/full_car_model.h"
 
 namespace {
 
-void printEquilibrium(const char* label, const pc_ekf::VehicleParameters& p) {
-  const pc_ekf::StaticEquilibrium e = pc_ekf::solveStaticEquilibrium(p);
-  std::printf("%s: M = %.2f kg, d_CG = %.4f m -> theta_s = %.4f deg, h2 - h1 = %.5f m\n", label,
-              p.added_mass, p.added_mass_position, e.roll_angle * 180.0 / M_PI,
-              e.height[1] - e.height[0]);
+using pc_ekf::EstimatorConfig;
+
+// The static equilibrium of the built-in models (other models: the label only).
+void printEquilibrium(const EstimatorConfig& c, const char* label, const Eigen::VectorXd& params,
+                      bool truth) {
+  using namespace pc_ekf;
+  if (c.rollPlane()) {
+    const VehicleParameters laws = truth && c.truth.vehicle ? *c.truth.vehicle : c.vehicle;
+    const VehicleParameters p = VehicleParameters::fromVector(params, laws);
+    const StaticEquilibrium e = solveStaticEquilibrium(p);
+    std::printf("%s: M = %.2f kg, d_CG = %.4f m -> theta_s = %.4f deg, h2 - h1 = %.5f m\n", label,
+                p.added_mass, p.added_mass_position, e.roll_angle * 180.0 / M_PI,
+                e.height[1] - e.height[0]);
+  } else if (c.model_type->name() == "full_car") {
+    const FullCarParameters p = FullCarParameters::fromVector(params, FullCarParameters());
+    const FullCarEquilibrium e = solveFullCarEquilibrium(p);
+    std::printf("%s: M = %.2f kg at x = %.4f m, y = %.4f m -> heave %.5f m, pitch %.4f deg "
+                "(> 0 front up), roll %.4f deg (> 0 left up)\n",
+                label, p.added_mass, p.added_mass_x, p.added_mass_y, e.heave,
+                e.pitch * 180.0 / M_PI, e.roll * 180.0 / M_PI);
+  } else {
+    std::printf("%s:\n", label);
+  }
 }
 
 }  // namespace
@@ -31,15 +50,13 @@ int main(int argc, char** argv) {
     const EstimatorConfig c = loadConfigFile(argv[2]);
     const auto model = makeModel(c, makeRoad(c));
     const auto truth = truthModel(c, *model);
-    const VehicleParameters& truth_laws = c.truth.vehicle ? *c.truth.vehicle : c.vehicle;
     const SyntheticDataSettings s = syntheticSettings(c, *truth, c.truth.seed);
     const std::vector<double>& times = s.times;
     const Eigen::VectorXd cases[2] = {model->nominalParameters(), truthParameters(c, *model)};
     const MechanicalModel* models[2] = {model.get(), truth.get()};
     const char* labels[2] = {"nominal", "truth"};
     for (int i = 0; i < 2; ++i) {
-      const VehicleParameters& laws = i == 0 ? c.vehicle : truth_laws;
-      printEquilibrium(labels[i], VehicleParameters::fromVector(cases[i], laws));
+      printEquilibrium(c, labels[i], cases[i], i == 1);
       if (i == 1) {
         const Eigen::VectorXd est = model->nominalParameters(), tru = truth->nominalParameters();
         for (Eigen::Index j = 0; j < est.size(); ++j) {
@@ -50,16 +67,23 @@ int main(int argc, char** argv) {
         }
         for (const auto& change : s.schedule) {
           const std::string from = "  from t = " + std::to_string(change.time) + " s";
-          printEquilibrium(from.c_str(), VehicleParameters::fromVector(change.params, laws));
+          printEquilibrium(c, from.c_str(), change.params, true);
         }
       }
       const auto z = simulateScheduled(*models[i], cases[i],
                                        i == 1 ? s.schedule : std::vector<ParameterChange>{}, times,
                                        c.integration);
-      std::printf("  %6s %11s %11s %11s %11s\n", "t [s]", "u1 [m]", "u2 [m]", "v1 [m/s]", "v2 [m/s]");
+      const auto& channels = model->channelNames();
+      std::printf("  %6s", "t [s]");
+      for (const auto& name : channels) {
+        const std::string head = name + (name[0] == 'v' ? " [m/s]" : " [m]");
+        std::printf(" %11s", head.c_str());
+      }
+      std::printf("\n");
       for (std::size_t k = 0; k < times.size(); ++k) {
-        std::printf("  %6.2f %11.6f %11.6f %11.6f %11.6f\n", times[k], z[k](0, 0), z[k](1, 0),
-                    z[k](2, 0), z[k](3, 0));
+        std::printf("  %6.2f", times[k]);
+        for (std::size_t ch = 0; ch < channels.size(); ++ch) std::printf(" %11.6f", z[k](ch, 0));
+        std::printf("\n");
       }
     }
     return 0;

@@ -69,6 +69,11 @@ int main(int argc, char** argv) {
                       ": key 'road.source' is topic; synthesize_bag needs an analytic or series "
                       "road to simulate");
     }
+    if (!config.model_type->twoContacts()) {
+      return args.badInput(config.source + ": model " + config.model_type->name() +
+                           ": synthesize_bag writes two-suspension bags (road/profile) only; "
+                           "estimate_offline without data files simulates this model");
+    }
     const auto road = makeRoad(config);
     const auto model = makeModel(config, road);
     const MeasurementSeries samples = synthesizeFromConfig(config, *model, seed);
@@ -103,7 +108,7 @@ int main(int argc, char** argv) {
     if (args.has("--csv")) {
       std::ofstream csv(args["--csv"]);
       if (!csv) return args.badInput(args["--csv"] + ": cannot open for writing");
-      writeMeasurementCsv(csv, samples);
+      writeMeasurementCsv(csv, samples, config.model_type->channelNames());
       csv.flush();
       if (!csv) return args.badInput(args["--csv"] + ": write failed");
     }
