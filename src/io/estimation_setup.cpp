@@ -25,8 +25,8 @@ std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
           const RoadSeries r = readRoadCsvFile(c.road.series_file);
           return std::make_shared<SampledRoad>(r.t, r.left, r.right);
         }
-        ContactSeries r = readContactRoadCsvFile(c.road.series_file, type.roadColumns());
-        return std::make_shared<SampledContactRoad>(std::move(r.t), std::move(r.heights));
+        const ContactSeries r = readContactRoadCsvFile(c.road.series_file, type.roadColumns());
+        return std::make_shared<SampledRoad>(r.t, r.heights);
       } catch (const CsvError& e) {
         throw ConfigError(c.source + ": key 'road.series.file': " + e.what());
       }

@@ -42,9 +42,7 @@ class RollPlaneType : public ModelType {
   std::shared_ptr<ModelParameters> read(YamlMapReader& r, const ModelParameters& base) const override;
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road) const override {
-    auto two = std::dynamic_pointer_cast<const RoadInput>(road);
-    if (!two) throw std::invalid_argument("roll_plane needs a road under its two contacts");
-    return std::make_shared<RollPlaneModel>(laws(p), std::move(two));
+    return std::make_shared<RollPlaneModel>(laws(p), std::move(road));
   }
   std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
                                                const ModelParameters&) const override {

@@ -23,7 +23,7 @@ void addCorners(const SpeedBumpSettings& s, double start, double t0, double t1,
   }
 }
 
-std::string describeTime(const char* what, double t) {
+std::string describeTime(const std::string& what, double t) {
   std::ostringstream os;
   os.precision(17);
   os << "SampledRoad: " << what << " at t = " << t;
@@ -139,25 +139,52 @@ std::vector<double> CourseRoad::breakpoints(double t0, double t1) const {
   return out;
 }
 
+SampledRoad::SampledRoad(int contacts) : heights_(contacts) {
+  if (contacts < 1) throw std::invalid_argument("SampledRoad: at least one contact");
+}
+
 SampledRoad::SampledRoad(std::vector<double> t, std::vector<double> left,
-                         std::vector<double> right) {
+                         std::vector<double> right)
+    : heights_(2) {
   if (t.size() != left.size() || t.size() != right.size()) {
     throw std::invalid_argument("SampledRoad: time and value series differ in length");
   }
   for (std::size_t i = 0; i < t.size(); ++i) append(t[i], left[i], right[i]);
 }
 
-void SampledRoad::append(double t, double left, double right) {
+SampledRoad::SampledRoad(const std::vector<double>& t,
+                         const std::vector<std::vector<double>>& heights)
+    : heights_(heights.size()) {
+  if (heights.empty()) throw std::invalid_argument("SampledRoad: at least one contact");
+  for (const auto& h : heights) {
+    if (h.size() != t.size()) {
+      throw std::invalid_argument("SampledRoad: time and value series differ in length");
+    }
+  }
+  std::vector<double> row(heights.size());
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    for (std::size_t c = 0; c < heights.size(); ++c) row[c] = heights[c][k];
+    append(t[k], row);
+  }
+}
+
+void SampledRoad::append(double t, double left, double right) { append(t, {left, right}); }
+
+void SampledRoad::append(double t, const std::vector<double>& heights) {
   if (!std::isfinite(t)) throw std::invalid_argument(describeTime("non-finite time", t));
   if (!t_.empty() && !(t > t_.back())) {
     throw std::invalid_argument(describeTime("time not after the last sample", t));
   }
-  if (!std::isfinite(left) || !std::isfinite(right)) {
-    throw std::invalid_argument(describeTime("non-finite height", t));
+  if (heights.size() != heights_.size()) {
+    throw std::invalid_argument(describeTime(std::to_string(heights.size()) + " heights for " +
+                                                 std::to_string(heights_.size()) + " contacts",
+                                             t));
+  }
+  for (double h : heights) {
+    if (!std::isfinite(h)) throw std::invalid_argument(describeTime("non-finite height", t));
   }
   t_.push_back(t);
-  left_.push_back(left);
-  right_.push_back(right);
+  for (std::size_t c = 0; c < heights.size(); ++c) heights_[c].push_back(heights[c]);
 }
 
 std::size_t SampledRoad::indexNeededFor(double t) const {
@@ -169,8 +196,7 @@ std::size_t SampledRoad::indexNeededFor(double t) const {
 void SampledRoad::discardBefore(double t) {
   const auto n = static_cast<std::ptrdiff_t>(indexNeededFor(t));
   t_.erase(t_.begin(), t_.begin() + n);
-  left_.erase(left_.begin(), left_.begin() + n);
-  right_.erase(right_.begin(), right_.begin() + n);
+  for (auto& h : heights_) h.erase(h.begin(), h.begin() + n);
 }
 
 double SampledRoad::firstTime() const {
@@ -183,40 +209,10 @@ double SampledRoad::lastTime() const {
   return t_.back();
 }
 
-Eigen::Vector2d SampledRoad::height(double t) const {
-  if (t_.empty()) return Eigen::Vector2d::Zero();  // no input yet: road at rest
-  if (t <= t_.front()) return {left_.front(), right_.front()};
-  if (t >= t_.back()) return {left_.back(), right_.back()};
-  const std::size_t i = std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1;
-  const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
-  return {left_[i] + w * (left_[i + 1] - left_[i]), right_[i] + w * (right_[i + 1] - right_[i])};
-}
-
-std::vector<double> SampledRoad::breakpoints(double t0, double t1) const {
-  const auto first = std::upper_bound(t_.begin(), t_.end(), t0);
-  const auto last = std::lower_bound(t_.begin(), t_.end(), t1);
-  if (first >= last) return {};
-  return std::vector<double>(first, last);
-}
-
-SampledContactRoad::SampledContactRoad(std::vector<double> t, std::vector<std::vector<double>> heights)
-    : t_(std::move(t)), heights_(std::move(heights)) {
-  if (heights_.empty()) throw std::invalid_argument("sampled road: no contacts");
-  for (const auto& h : heights_) {
-    if (h.size() != t_.size()) throw std::invalid_argument("sampled road: a column's length differs from the times'");
-    for (double v : h) {
-      if (!std::isfinite(v)) throw std::invalid_argument("sampled road: non-finite height");
-    }
-  }
-  for (std::size_t k = 1; k < t_.size(); ++k) {
-    if (!(t_[k] > t_[k - 1])) throw std::invalid_argument("sampled road: times not strictly increasing");
-  }
-}
-
-void SampledContactRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) const {
+void SampledRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) const {
   const std::size_t n = heights_.size();
   if (t_.empty()) {
-    out.setZero();
+    out.setZero();  // no input yet: road at rest
     return;
   }
   if (t <= t_.front() || t >= t_.back()) {
@@ -226,10 +222,20 @@ void SampledContactRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) cons
   }
   const std::size_t i = std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1;
   const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
-  for (std::size_t c = 0; c < n; ++c) out[c] = heights_[c][i] + w * (heights_[c][i + 1] - heights_[c][i]);
+  for (std::size_t c = 0; c < n; ++c) {
+    out[c] = heights_[c][i] + w * (heights_[c][i + 1] - heights_[c][i]);
+  }
 }
 
-std::vector<double> SampledContactRoad::breakpoints(double t0, double t1) const {
+Eigen::Vector2d SampledRoad::height(double t) const {
+  if (heights_.size() != 2) throw std::logic_error("SampledRoad::height on a road of " +
+                                                   std::to_string(heights_.size()) + " contacts");
+  Eigen::Vector2d out;
+  heights(t, out);
+  return out;
+}
+
+std::vector<double> SampledRoad::breakpoints(double t0, double t1) const {
   const auto first = std::upper_bound(t_.begin(), t_.end(), t0);
   const auto last = std::lower_bound(t_.begin(), t_.end(), t1);
   if (first >= last) return {};

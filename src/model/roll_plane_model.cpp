@@ -193,7 +193,7 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) bool soaDerivativesD
 class RollPlaneBatch : public ModelBatch {
  public:
   RollPlaneBatch(PointConstants c, DamperLaw law, double tanh_rate,
-                 std::shared_ptr<const RoadInput> road)
+                 std::shared_ptr<const ContactRoad> road)
       : c_(std::move(c)),
         p_(c_.pointers()),
         law_(law),
@@ -213,7 +213,8 @@ class RollPlaneBatch : public ModelBatch {
       throw std::invalid_argument("RollPlaneModel: state batch must be 8 x pointCount()");
     }
     dydt.resize(8, y.cols());  // no-op when already sized
-    const Eigen::Vector2d road = road_->height(t);
+    Eigen::Vector2d road;
+    road_->heights(t, road);
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
       if (law_ == DamperLaw::kTanh) {
         pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1,
@@ -234,7 +235,8 @@ class RollPlaneBatch : public ModelBatch {
       throw std::invalid_argument("RollPlaneModel: transposed batch must be pointCount() x 8");
     }
     dydt.resize(n, 8);  // no-op when already sized
-    const Eigen::Vector2d road = road_->height(t);
+    Eigen::Vector2d road;
+    road_->heights(t, road);
     const bool beyond_series = soaDerivativesDispatch(p_, law_ == DamperLaw::kTanh, tanh_rate_,
                                                       road[0], road[1], y.data(), dydt.data(), n);
     if (!beyond_series) return;
@@ -257,7 +259,7 @@ class RollPlaneBatch : public ModelBatch {
   ConstantPointers p_;
   DamperLaw law_;
   double tanh_rate_;
-  std::shared_ptr<const RoadInput> road_;
+  std::shared_ptr<const ContactRoad> road_;
 };
 
 std::string num(double value) {
@@ -274,12 +276,16 @@ std::string outOfDomain(const std::string& name, double value, const std::string
 }  // namespace
 
 RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
-                               std::shared_ptr<const RoadInput> road)
+                               std::shared_ptr<const ContactRoad> road)
     : nominal_(nominal),
       nominal_vector_(nominal.toVector()),
       h_(Eigen::MatrixXd::Zero(4, 8)),
       road_(std::move(road)) {
   if (!road_) throw std::invalid_argument("RollPlaneModel: no road input");
+  if (road_->contactCount() != 2) {
+    throw std::invalid_argument("RollPlaneModel: a road under two contacts expected, got " +
+                                std::to_string(road_->contactCount()));
+  }
   const std::string why = invalidReason(nominal_vector_);
   if (!why.empty()) throw std::invalid_argument("RollPlaneModel: nominal parameters: " + why);
   if (nominal_.damper == DamperLaw::kTanh &&

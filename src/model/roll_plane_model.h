@@ -58,7 +58,8 @@ std::vector<StaticEquilibrium> solveStaticEquilibria(const std::vector<VehiclePa
 
 class RollPlaneModel : public MechanicalModel {
  public:
-  RollPlaneModel(const VehicleParameters& nominal, std::shared_ptr<const RoadInput> road);
+  // road: two contacts (left, right), else std::invalid_argument.
+  RollPlaneModel(const VehicleParameters& nominal, std::shared_ptr<const ContactRoad> road);
 
   int stateSize() const override { return 8; }
   const std::vector<std::string>& stateNames() const override;
@@ -71,14 +72,14 @@ class RollPlaneModel : public MechanicalModel {
   std::vector<double> breakpoints(double t0, double t1) const override;
 
   const VehicleParameters& nominal() const { return nominal_; }
-  const RoadInput& road() const { return *road_; }
+  const ContactRoad& road() const { return *road_; }
   const ContactRoad* contactRoad() const override { return road_.get(); }
 
  private:
   VehicleParameters nominal_;
   Eigen::VectorXd nominal_vector_;
   Eigen::MatrixXd h_;
-  std::shared_ptr<const RoadInput> road_;
+  std::shared_ptr<const ContactRoad> road_;
 };
 
 }  // namespace pc_ekf

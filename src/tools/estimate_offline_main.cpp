@@ -38,7 +38,7 @@ int main(int argc, char** argv) {
     int status = 0;
     if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
     // A bag supplies the road (replacing the config's) and the samples.
-    std::shared_ptr<const RoadInput> bag_road;
+    std::shared_ptr<const ContactRoad> bag_road;
     MeasurementSeries series;
     if (args.has("--bag") && !config.model_type->twoContacts()) {
       return args.badInput(config.source + ": model " + config.model_type->name() +

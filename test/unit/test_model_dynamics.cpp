@@ -131,7 +131,7 @@ TEST(RollPlaneDynamics, DormandPrinceConvergesWithFifthOrder) {
 TEST(RollPlaneDynamics, ZeroRoadKeepsEquilibriumExactly) {
   Eigen::MatrixXd params;
   for (int road_kind = 0; road_kind < 2; ++road_kind) {
-    std::shared_ptr<const RoadInput> road;
+    std::shared_ptr<const ContactRoad> road;
     if (road_kind == 0) {
       SineSettings s;
       s.amplitude = 0.0;

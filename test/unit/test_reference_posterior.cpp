@@ -219,7 +219,7 @@ double normal(std::mt19937_64& rng) {
 }
 
 // Synthetic data of SPEC §1.6: N samples over 3 s, 1 % relative noise.
-VehicleCase makeCase(std::shared_ptr<const RoadInput> road, int samples, std::uint64_t seed) {
+VehicleCase makeCase(std::shared_ptr<const ContactRoad> road, int samples, std::uint64_t seed) {
   VehicleCase c;
   c.model = std::make_shared<RollPlaneModel>(VehicleParameters(), std::move(road));
   c.mapping = std::make_unique<ParameterMapping>(
@@ -365,7 +365,7 @@ TEST(ReferencePosteriorReport, DISABLED_PaperInputs) {
   const auto sine = std::make_shared<SineRoad>(SineSettings());
   const struct {
     const char* name;
-    std::shared_ptr<const RoadInput> road;
+    std::shared_ptr<const ContactRoad> road;
     int samples;
   } cases[] = {{"bump N=10", bump, 10},
                {"bump N=100", bump, 100},
