@@ -105,14 +105,17 @@ struct StampedSample {
 };
 
 // Samples with equal stamps observing disjoint channels become one sample.
-MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedSample>& raw) {
+MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedSample>& raw,
+                                   int channels) {
   std::stable_sort(raw.begin(), raw.end(),
                    [](const StampedSample& a, const StampedSample& b) { return a.ns < b.ns; });
   MeasurementSeries out;
+  std::vector<double> values(channels);
+  std::vector<bool> seen(channels);
   for (std::size_t i = 0; i < raw.size();) {
     std::size_t j = i;
-    double values[4] = {0, 0, 0, 0};
-    bool seen[4] = {false, false, false, false};
+    std::fill(values.begin(), values.end(), 0.0);
+    std::fill(seen.begin(), seen.end(), false);
     for (; j < raw.size() && raw[j].ns == raw[i].ns; ++j) {
       const Measurement& m = raw[j].m;
       for (std::size_t k = 0; k < m.channels.size(); ++k) {
@@ -120,7 +123,7 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
         if (seen[c]) {
           throw BagError(path + ": two suspension/joint_states messages stamped " +
                          stampText(raw[i].stamp) + " both observe channel " + std::to_string(c) +
-                         " (u1, u2, v1, v2 = 0..3)");
+                         (channels == 4 ? " (u1, u2, v1, v2 = 0..3)" : ""));
         }
         seen[c] = true;
         values[c] = m.values(static_cast<Eigen::Index>(k));
@@ -129,7 +132,7 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
     Measurement merged;
     merged.time = raw[i].m.time;
     std::vector<double> kept;
-    for (int c = 0; c < 4; ++c) {
+    for (int c = 0; c < channels; ++c) {
       if (!seen[c]) continue;
       merged.channels.push_back(c);
       kept.push_back(values[c]);
@@ -139,6 +142,61 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
     i = j;
   }
   return out;
+}
+
+// Road: by header stamp; the first stamp is the time origin.
+void readTwoContactRoad(const std::string& path, BagRecord& record,
+                        std::vector<RoadProfile::ConstPtr>& road_msgs) {
+  std::stable_sort(road_msgs.begin(), road_msgs.end(),
+                   [](const RoadProfile::ConstPtr& a, const RoadProfile::ConstPtr& b) {
+                     return a->header.stamp < b->header.stamp;
+                   });
+  record.origin = road_msgs.front()->header.stamp;
+  record.road_contacts.heights.resize(2);
+  for (std::size_t i = 0; i < road_msgs.size(); ++i) {
+    const RoadProfile& r = *road_msgs[i];
+    if (i > 0 && r.header.stamp == road_msgs[i - 1]->header.stamp) {
+      throw BagError(path + ": two '" + record.road_topic + "' messages stamped " +
+                     stampText(r.header.stamp));
+    }
+    if (!std::isfinite(r.left) || !std::isfinite(r.right)) {
+      throw BagError(path + ": '" + record.road_topic + "' message stamped " +
+                     stampText(r.header.stamp) + " has a non-finite height");
+    }
+    const double t = secondsSince(r.header.stamp, record.origin);
+    record.road.t.push_back(t);
+    record.road.left.push_back(r.left);
+    record.road.right.push_back(r.right);
+    record.road_contacts.t.push_back(t);
+    record.road_contacts.heights[0].push_back(r.left);
+    record.road_contacts.heights[1].push_back(r.right);
+  }
+}
+
+void readContactRoad(const std::string& path, BagRecord& record,
+                     std::vector<RoadHeights::ConstPtr>& msgs,
+                     const std::vector<std::string>& contacts) {
+  std::stable_sort(msgs.begin(), msgs.end(),
+                   [](const RoadHeights::ConstPtr& a, const RoadHeights::ConstPtr& b) {
+                     return a->header.stamp < b->header.stamp;
+                   });
+  record.origin = msgs.front()->header.stamp;
+  record.road_contacts.heights.resize(contacts.size());
+  std::vector<double> heights;
+  for (std::size_t i = 0; i < msgs.size(); ++i) {
+    const RoadHeights& r = *msgs[i];
+    if (i > 0 && r.header.stamp == msgs[i - 1]->header.stamp) {
+      throw BagError(path + ": two '" + record.road_topic + "' messages stamped " +
+                     stampText(r.header.stamp));
+    }
+    const std::string problem = roadHeightsInOrder(r, contacts, &heights);
+    if (!problem.empty()) {
+      throw BagError(path + ": '" + record.road_topic + "' message stamped " +
+                     stampText(r.header.stamp) + ": " + problem);
+    }
+    record.road_contacts.t.push_back(secondsSince(r.header.stamp, record.origin));
+    for (std::size_t c = 0; c < contacts.size(); ++c) record.road_contacts.heights[c].push_back(heights[c]);
+  }
 }
 
 }  // namespace
@@ -171,25 +229,34 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   }
 
   std::vector<RoadProfile::ConstPtr> road_msgs;
+  std::vector<RoadHeights::ConstPtr> heights_msgs;
   std::vector<sensor_msgs::JointState::ConstPtr> joint_msgs;
   std::vector<ParameterEstimate::ConstPtr> truth_msgs;
   std::vector<std::string> topics;
   try {
-    record.road_topic = findTopic<RoadProfile>(path, bag, options.road_topic, &topics);
+    record.road_topic = options.contacts.empty()
+                            ? findTopic<RoadProfile>(path, bag, options.road_topic, &topics)
+                            : findTopic<RoadHeights>(path, bag, options.road_heights_topic, &topics);
     record.joint_states_topic =
         findTopic<sensor_msgs::JointState>(path, bag, options.joint_states_topic, &topics);
     const std::string truth_topic =
         findTopic<ParameterEstimate>(path, bag, options.ground_truth_topic, &topics);
     if (record.road_topic.empty()) {
-      throw BagError(path + ": no pc_ekf/RoadProfile messages on a topic ending in '" +
-                     options.road_topic +
+      throw BagError(path + ": no " +
+                     (options.contacts.empty() ? "pc_ekf/RoadProfile" : "pc_ekf/RoadHeights") +
+                     " messages on a topic ending in '" +
+                     (options.contacts.empty() ? options.road_topic : options.road_heights_topic) +
                      "' (the road defines t = 0); topics in the bag: " + join(topics));
     }
     if (record.joint_states_topic.empty()) {
       throw BagError(path + ": no sensor_msgs/JointState messages on a topic ending in '" +
                      options.joint_states_topic + "'; topics in the bag: " + join(topics));
     }
-    road_msgs = readTopic<RoadProfile>(path, bag, record.road_topic);
+    if (options.contacts.empty()) {
+      road_msgs = readTopic<RoadProfile>(path, bag, record.road_topic);
+    } else {
+      heights_msgs = readTopic<RoadHeights>(path, bag, record.road_topic);
+    }
     joint_msgs = readTopic<sensor_msgs::JointState>(path, bag, record.joint_states_topic);
     truth_msgs = readTopic<ParameterEstimate>(path, bag, truth_topic);
   } catch (const BagError&) {
@@ -197,33 +264,17 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   } catch (const std::exception& e) {
     throw BagError(path + ": corrupt or truncated bag: " + e.what());
   }
-  if (road_msgs.empty()) {
+  if (road_msgs.empty() && heights_msgs.empty()) {
     throw BagError(path + ": topic '" + record.road_topic + "' has no messages");
   }
   if (joint_msgs.empty()) {
     throw BagError(path + ": topic '" + record.joint_states_topic +
                    "' has no messages (no samples)");
   }
-
-  // Road: by header stamp; the first stamp is the time origin.
-  std::stable_sort(road_msgs.begin(), road_msgs.end(),
-                   [](const RoadProfile::ConstPtr& a, const RoadProfile::ConstPtr& b) {
-                     return a->header.stamp < b->header.stamp;
-                   });
-  record.origin = road_msgs.front()->header.stamp;
-  for (std::size_t i = 0; i < road_msgs.size(); ++i) {
-    const RoadProfile& r = *road_msgs[i];
-    if (i > 0 && r.header.stamp == road_msgs[i - 1]->header.stamp) {
-      throw BagError(path + ": two '" + record.road_topic + "' messages stamped " +
-                     stampText(r.header.stamp));
-    }
-    if (!std::isfinite(r.left) || !std::isfinite(r.right)) {
-      throw BagError(path + ": '" + record.road_topic + "' message stamped " +
-                     stampText(r.header.stamp) + " has a non-finite height");
-    }
-    record.road.t.push_back(secondsSince(r.header.stamp, record.origin));
-    record.road.left.push_back(r.left);
-    record.road.right.push_back(r.right);
+  if (options.contacts.empty()) {
+    readTwoContactRoad(path, record, road_msgs);
+  } else {
+    readContactRoad(path, record, heights_msgs, options.contacts);
   }
 
   // Samples: by header stamp, relative to the road's origin.
@@ -253,19 +304,39 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
                               " joint_states message(s) observed no suspension channel; skipped");
   }
   if (raw.empty()) {
-    throw BagError(path + ": no '" + record.joint_states_topic + "' message observes '" +
-                   options.joints.left + "' or '" + options.joints.right +
+    std::string names;
+    for (const auto& j : options.joints.resolved()) names += (names.empty() ? "'" : "' or '") + j.name;
+    throw BagError(path + ": no '" + record.joint_states_topic + "' message observes " + names +
                    "' (no samples); first problem: " +
                    (record.warnings.empty() ? std::string("none") : record.warnings.front()));
   }
-  record.samples = mergeEqualStamps(path, raw);
+  record.samples = mergeEqualStamps(path, raw, options.joints.channelCount());
   if (!truth_msgs.empty()) record.ground_truth = *truth_msgs.back();
   return record;
 }
 
+BagReadOptions bagReadOptions(const EstimatorConfig& config) {
+  BagReadOptions o;
+  if (config.model_type->twoContacts()) return o;
+  o.joints = suspensionJoints(*config.model_type, config.node.joint_names);
+  o.contacts = config.model_type->contactNames();
+  return o;
+}
+
 void writeBag(const std::string& path, const BagContents& c) {
-  if (c.road.left.size() != c.road.t.size() || c.road.right.size() != c.road.t.size()) {
+  const bool contacts = !c.contacts.empty();
+  const std::vector<double>& road_t = contacts ? c.road_contacts.t : c.road.t;
+  if (!contacts && (c.road.left.size() != c.road.t.size() || c.road.right.size() != c.road.t.size())) {
     throw BagError(path + ": road time and height series differ in length");
+  }
+  if (contacts) {
+    if (c.road_contacts.heights.size() != c.contacts.size()) {
+      throw BagError(path + ": " + std::to_string(c.road_contacts.heights.size()) +
+                     " road columns for " + std::to_string(c.contacts.size()) + " contacts");
+    }
+    for (const auto& h : c.road_contacts.heights) {
+      if (h.size() != road_t.size()) throw BagError(path + ": road time and height series differ in length");
+    }
   }
   try {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
@@ -282,13 +353,19 @@ void writeBag(const std::string& path, const BagContents& c) {
         bag.write(c.ground_truth_topic, m.header.stamp, m);
       }
     };
-    while (r < c.road.t.size() || s < c.samples.size()) {
+    std::vector<double> row(c.contacts.size());
+    while (r < road_t.size() || s < c.samples.size()) {
       const bool road_next =
-          s >= c.samples.size() || (r < c.road.t.size() && c.road.t[r] <= c.samples[s].time);
-      truthsUpTo(stampAt(c.origin, road_next ? c.road.t[r] : c.samples[s].time));
+          s >= c.samples.size() || (r < road_t.size() && road_t[r] <= c.samples[s].time);
+      truthsUpTo(stampAt(c.origin, road_next ? road_t[r] : c.samples[s].time));
       if (road_next) {
-        const ros::Time stamp = stampAt(c.origin, c.road.t[r]);
-        bag.write(c.road_topic, stamp, roadProfileMessage(stamp, c.road.left[r], c.road.right[r]));
+        const ros::Time stamp = stampAt(c.origin, road_t[r]);
+        if (contacts) {
+          for (std::size_t k = 0; k < row.size(); ++k) row[k] = c.road_contacts.heights[k][r];
+          bag.write(c.road_heights_topic, stamp, roadHeightsMessage(stamp, c.contacts, row));
+        } else {
+          bag.write(c.road_topic, stamp, roadProfileMessage(stamp, c.road.left[r], c.road.right[r]));
+        }
         ++r;
       } else {
         const ros::Time stamp = stampAt(c.origin, c.samples[s].time);

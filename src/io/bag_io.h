@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "filter/measurement.h"
+#include "io/estimator_config.h"
 #include "io/measurement_csv.h"
 #include "ros/message_conversion.h"
 
@@ -30,6 +31,7 @@ class BagError : public std::runtime_error {
 };
 
 constexpr const char* kRoadTopic = "road/profile";
+constexpr const char* kRoadHeightsTopic = "road/heights";
 constexpr const char* kJointStatesTopic = "suspension/joint_states";
 constexpr const char* kGroundTruthTopic = "ground_truth";
 
@@ -38,14 +40,20 @@ bool topicMatches(const std::string& topic, const std::string& suffix);
 
 struct BagReadOptions {
   SuspensionJoints joints;
+  // The model's contact names: empty = a two-contact road on road_topic
+  // (pc_ekf/RoadProfile); else the road is read from road_heights_topic
+  // (pc_ekf/RoadHeights) in this order.
+  std::vector<std::string> contacts;
   std::string road_topic = kRoadTopic;  // suffixes
+  std::string road_heights_topic = kRoadHeightsTopic;
   std::string joint_states_topic = kJointStatesTopic;
   std::string ground_truth_topic = kGroundTruthTopic;
 };
 
 struct BagRecord {
-  ros::Time origin;           // stamp of the first road/profile message (t = 0)
-  RoadSeries road;            // t in s since origin, strictly increasing
+  ros::Time origin;           // stamp of the first road message (t = 0)
+  RoadSeries road;            // two-contact road: t in s since origin, strictly increasing
+  ContactSeries road_contacts;  // the road under every contact (two-contact roads too)
   MeasurementSeries samples;  // t in s since origin, strictly increasing, non-empty
   std::optional<ParameterEstimate> ground_truth;  // the last one, when present
   std::string road_topic, joint_states_topic;     // the topics actually read
@@ -64,11 +72,20 @@ struct BagRecord {
 // same channel (samples with the same stamp and disjoint channels merge).
 BagRecord readBag(const std::string& path, const BagReadOptions& options = {});
 
+// How a config's model reads bags: two-contact models the defaults
+// (road/profile, left/right joints), others road/heights with the model's
+// contacts and node.joints.
+BagReadOptions bagReadOptions(const EstimatorConfig& config);
+
 // What writeBag writes: road samples and measurement samples at
 // origin + t (header stamp = bag record time), and an optional ground truth.
 struct BagContents {
   ros::Time origin;
-  RoadSeries road;
+  RoadSeries road;  // two-contact models (road/profile)
+  // Other models: the road under `contacts` (road/heights), used when contacts is not empty.
+  ContactSeries road_contacts;
+  std::vector<std::string> contacts;
+  std::string road_heights_topic = kRoadHeightsTopic;
   MeasurementSeries samples;
   std::optional<ParameterEstimate> ground_truth;  // written at its header stamp
   // Further ground truths (a truth that changes), stamps not decreasing; each

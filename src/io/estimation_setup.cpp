@@ -182,22 +182,25 @@ MeasurementSeries synthesizeFromConfig(const EstimatorConfig& c, const Mechanica
                                 syntheticSettings(c, *truth, seed));
 }
 
-RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate) {
-  if (road.contactCount() != 2) throw std::invalid_argument("sampleRoad: a two-contact road expected");
+ContactSeries sampleContactRoad(const ContactRoad& road, double t_end, double rate) {
   const long count = static_cast<long>(std::ceil(t_end * rate - 1e-9)) + 1;
-  RoadSeries r;
+  ContactSeries r;
   r.t.reserve(count);
-  r.left.reserve(count);
-  r.right.reserve(count);
-  Eigen::VectorXd y(2);
+  r.heights.assign(road.contactCount(), {});
+  Eigen::VectorXd y(road.contactCount());
   for (long i = 0; i < count; ++i) {
     const double t = static_cast<double>(i) / rate;
     road.heights(t, y);
     r.t.push_back(t);
-    r.left.push_back(y(0));
-    r.right.push_back(y(1));
+    for (int c = 0; c < road.contactCount(); ++c) r.heights[c].push_back(y(c));
   }
   return r;
+}
+
+RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate) {
+  if (road.contactCount() != 2) throw std::invalid_argument("sampleRoad: a two-contact road expected");
+  const ContactSeries s = sampleContactRoad(road, t_end, rate);
+  return RoadSeries{s.t, s.heights[0], s.heights[1]};
 }
 
 }  // namespace pc_ekf

@@ -61,5 +61,7 @@ SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const Mechanic
 // `road` sampled at `rate` Hz from t = 0 until the first time >= t_end: the
 // road/profile stream a bag or a live vehicle would carry.
 RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate);
+// The same for any number of contacts.
+ContactSeries sampleContactRoad(const ContactRoad& road, double t_end, double rate);
 
 }  // namespace pc_ekf

@@ -247,14 +247,27 @@ bool readFlag(YamlMapReader& r, const std::string& key, bool value) {
   r.fail(key, "'" + text + "'", "true or false");
 }
 
-void readNode(YamlMapReader r, NodeConfig& n) {
+void readNode(YamlMapReader r, NodeConfig& n, const ModelType& type) {
+  // One JointState name per suspension of the model, under its key.
   YamlMapReader j = r.map("joints");
-  j.text("left", n.left_joint);
-  j.text("right", n.right_joint);
-  if (n.left_joint.empty()) j.fail("left", "(empty)", "a joint name");
-  if (n.right_joint.empty()) j.fail("right", "(empty)", "a joint name");
-  if (n.left_joint == n.right_joint) {
-    j.fail("right", "'" + n.right_joint + "'", "a name different from joints.left");
+  const auto& suspensions = type.suspensions();
+  n.joint_names.clear();
+  for (const auto& s : suspensions) {
+    std::string name = s.default_joint;
+    if (type.name() == "roll_plane") name = s.config_key == "left" ? n.left_joint : n.right_joint;
+    j.text(s.config_key, name);
+    if (name.empty()) j.fail(s.config_key, "(empty)", "a joint name");
+    for (std::size_t k = 0; k < n.joint_names.size(); ++k) {
+      if (n.joint_names[k] == name) {
+        j.fail(s.config_key, "'" + name + "'",
+               "a name different from joints." + suspensions[k].config_key);
+      }
+    }
+    n.joint_names.push_back(name);
+  }
+  if (type.name() == "roll_plane") {
+    n.left_joint = n.joint_names[0];
+    n.right_joint = n.joint_names[1];
   }
   j.finish();
   n.reset_on_time_jump = readFlag(r, "reset_on_time_jump", n.reset_on_time_jump);
@@ -529,7 +542,7 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   integ.finish();
 
   readFilterSections(root, c);
-  readNode(root.map("node"), c.node);
+  readNode(root.map("node"), c.node, *c.model_type);
   root.finish();
   return c;
 }

@@ -58,7 +58,9 @@ void EstimatorDiagnostics::reportConfiguration(diagnostic_updater::DiagnosticSta
   s.add("pc order", c.pc_order);
   s.add("collocation points", c.collocation.points);
   s.add("sampling interval (analytic origin)", c.sampling.interval());
-  s.add("joints", c.node.left_joint + ", " + c.node.right_joint);
+  std::string joints;
+  for (const auto& j : c.node.joint_names) joints += (joints.empty() ? "" : ", ") + j;
+  s.add("joints", joints);
   s.add("batch method", toString(c.node.batch_method));
   s.add("coherence check", c.node.coherence_check);
   s.add("coherence decimation", c.health.coherence_decimation);

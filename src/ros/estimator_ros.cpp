@@ -66,17 +66,12 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
       pnh_(pnh),
       timeline_(timelineSettings(config_)),
       diagnostics_(nh, pnh, name, config_) {
-  if (!config_.model_type->twoContacts()) {
-    throw ConfigError(config_.source + ": key 'model.type': estimator_node takes two-suspension "
-                      "models (road/profile, two joints) so far; " + config_.model_type->name() +
-                      " runs in estimate_offline");
-  }
-  joints_.left = config_.node.left_joint;
-  joints_.right = config_.node.right_joint;
+  joints_ = suspensionJoints(*config_.model_type, config_.node.joint_names);
   // Built now so that a bad road file or collocation design is a start-up error.
   if (config_.road.source == RoadSource::kTopic) {
     prior_propagator_ =
-        makePropagator(config_, makeModel(config_, std::make_shared<SampledRoad>()));
+        makePropagator(config_, makeModel(config_, std::make_shared<SampledRoad>(
+                                                       timelineSettings(config_).contacts)));
   } else {
     analytic_propagator_ = makePropagator(config_, makeModel(config_, makeRoad(config_)));
     prior_propagator_ = analytic_propagator_;
@@ -87,6 +82,11 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
         config_.pdf.bins, config_.pdf.seed);
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
+  if (!checkpoint_file_.empty() && !config_.model_type->twoContacts()) {
+    throw ConfigError(pnh_.resolveName("checkpoint_file") + ": checkpoints keep a two-contact "
+                      "road; model " + config_.model_type->name() + " has " +
+                      std::to_string(config_.model_type->contactNames().size()) + " contacts");
+  }
   // Before any subscription: no callback may see the prior state.
   if (!checkpoint_file_.empty()) resumeFromCheckpoint();
 
@@ -97,7 +97,11 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   const auto hints = ros::TransportHints().tcpNoDelay();
   joint_state_sub_ =
       nh_.subscribe("suspension/joint_states", queue, &EstimatorRos::onJointState, this, hints);
-  road_sub_ = nh_.subscribe("road/profile", queue, &EstimatorRos::onRoad, this, hints);
+  if (config_.model_type->twoContacts()) {
+    road_sub_ = nh_.subscribe("road/profile", queue, &EstimatorRos::onRoad, this, hints);
+  }
+  road_heights_sub_ =
+      nh_.subscribe("road/heights", queue, &EstimatorRos::onRoadHeights, this, hints);
   reset_srv_ = pnh_.advertiseService("reset", &EstimatorRos::onReset, this);
   batch_srv_ = pnh_.advertiseService("estimate_batch", &EstimatorRos::onEstimateBatch, this);
 
@@ -227,15 +231,35 @@ void EstimatorRos::onJointState(const sensor_msgs::JointState::ConstPtr& msg) {
 }
 
 void EstimatorRos::onRoad(const RoadProfile::ConstPtr& msg) {
+  addRoad(msg->header.stamp, {msg->left, msg->right}, "road/profile");
+}
+
+void EstimatorRos::onRoadHeights(const RoadHeights::ConstPtr& msg) {
+  std::vector<double> heights;
+  const std::string problem =
+      roadHeightsInOrder(*msg, config_.model_type->contactNames(), &heights);
+  if (!problem.empty()) {
+    EstimatorCounters& counters = diagnostics_.counters();
+    ++counters.road_received;
+    ++counters.road_rejected["contacts"];
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: road/heights rejected (%s), stamp %.9f", name_.c_str(),
+                      problem.c_str(), msg->header.stamp.toSec());
+    return;
+  }
+  addRoad(msg->header.stamp, heights, "road/heights");
+}
+
+void EstimatorRos::addRoad(const ros::Time& stamp, const std::vector<double>& heights,
+                           const char* topic) {
   const double now = steadySeconds();
   EstimatorCounters& counters = diagnostics_.counters();
   ++counters.road_received;
-  StampVerdict v = timeline_.addRoad(msg->header.stamp, msg->left, msg->right, now);
+  StampVerdict v = timeline_.addRoad(stamp, heights, now);
   if (v == StampVerdict::kTimeJump && config_.node.reset_on_time_jump) {
-    ROS_WARN("%s: road/profile stamp jumped back in time: reset to the prior", name_.c_str());
+    ROS_WARN("%s: %s stamp jumped back in time: reset to the prior", name_.c_str(), topic);
     ++counters.time_jump_resets;
     startRun();
-    v = timeline_.addRoad(msg->header.stamp, msg->left, msg->right, now);
+    v = timeline_.addRoad(stamp, heights, now);
   }
   if (v == StampVerdict::kAccepted) {
     ++counters.road_accepted;
@@ -244,8 +268,8 @@ void EstimatorRos::onRoad(const RoadProfile::ConstPtr& msg) {
   }
   ++counters.road_rejected[toString(v)];
   if (v != StampVerdict::kIgnored) {
-    ROS_WARN_THROTTLE(kWarnPeriod, "%s: road/profile rejected (%s), stamp %.9f", name_.c_str(),
-                      toString(v), msg->header.stamp.toSec());
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: %s rejected (%s), stamp %.9f", name_.c_str(), topic,
+                      toString(v), stamp.toSec());
   }
 }
 

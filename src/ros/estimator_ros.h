@@ -6,6 +6,7 @@
 // nodelet's single-threaded queue): nothing here is locked.
 #pragma once
 
+#include <pc_ekf/RoadHeights.h>
 #include <pc_ekf/RoadProfile.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
@@ -37,6 +38,8 @@ class EstimatorRos {
  private:
   void onJointState(const sensor_msgs::JointState::ConstPtr& msg);
   void onRoad(const RoadProfile::ConstPtr& msg);
+  void onRoadHeights(const RoadHeights::ConstPtr& msg);
+  void addRoad(const ros::Time& stamp, const std::vector<double>& heights, const char* topic);
   void onWaitTimer(const ros::WallTimerEvent&);
   void onDiagnosticsTimer(const ros::WallTimerEvent&);
   bool onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res);
@@ -68,7 +71,7 @@ class EstimatorRos {
   int checkpoint_every_ = 100;   // samples of the run between writes
   ros::Time last_processed_stamp_;
 
-  ros::Subscriber joint_state_sub_, road_sub_;
+  ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_;
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;
   ros::ServiceServer reset_srv_, batch_srv_;
   ros::WallTimer wait_timer_, diagnostics_timer_;

@@ -17,6 +17,7 @@ TimelineSettings timelineSettings(const EstimatorConfig& c) {
   s.road_wait_timeout = c.node.road_wait_timeout;
   s.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);
   s.max_road = static_cast<std::size_t>(c.node.max_road_samples);
+  s.contacts = static_cast<int>(c.model_type->contactNames().size());
   return s;
 }
 
@@ -50,7 +51,7 @@ void EstimatorTimeline::reset() {
   last_road_.reset();
   last_sample_.reset();
   // A new buffer, not a cleared one: the previous run's model may still hold it.
-  road_ = std::make_shared<SampledRoad>();
+  road_ = std::make_shared<SampledRoad>(settings_.contacts);
   road_history_complete_ = true;
   last_road_arrival_ = 0.0;
   road_needed_from_ = 0.0;
@@ -88,7 +89,18 @@ StampVerdict EstimatorTimeline::order(const std::optional<ros::Time>& last,
 
 StampVerdict EstimatorTimeline::addRoad(const ros::Time& stamp, double left, double right,
                                         double arrival) {
-  if (!std::isfinite(left) || !std::isfinite(right)) return StampVerdict::kNonFinite;
+  return addRoad(stamp, std::vector<double>{left, right}, arrival);
+}
+
+StampVerdict EstimatorTimeline::addRoad(const ros::Time& stamp, const std::vector<double>& heights,
+                                        double arrival) {
+  for (double h : heights) {
+    if (!std::isfinite(h)) return StampVerdict::kNonFinite;
+  }
+  if (static_cast<int>(heights.size()) != settings_.contacts) {
+    throw std::invalid_argument("EstimatorTimeline::addRoad: " + std::to_string(heights.size()) +
+                                " heights for " + std::to_string(settings_.contacts) + " contacts");
+  }
   if (mode_ == RoadMode::kAnalytic) return StampVerdict::kIgnored;
   const StampVerdict v = order(last_road_, stamp);
   if (v != StampVerdict::kAccepted) return v;
@@ -96,7 +108,7 @@ StampVerdict EstimatorTimeline::addRoad(const ros::Time& stamp, double left, dou
     mode_ = RoadMode::kTopic;
     origin_ = stamp;
   }
-  road_->append(secondsSince(stamp, *origin_), left, right);
+  road_->append(secondsSince(stamp, *origin_), heights);
   last_road_ = stamp;
   last_road_arrival_ = arrival;
   boundRoad();

@@ -46,6 +46,7 @@ struct TimelineSettings {
   double road_wait_timeout = 0.5;    // s of wall clock
   std::size_t max_pending = 1000;
   std::size_t max_road = 1000000;
+  int contacts = 2;                  // road heights per road message (the model's contacts)
 };
 
 // The settings the config's node: and sampling sections give.
@@ -81,6 +82,8 @@ class EstimatorTimeline {
 
   // `arrival`: wall-clock seconds, for the road wait of pending samples.
   StampVerdict addRoad(const ros::Time& stamp, double left, double right, double arrival);
+  // Any number of contacts (settings.contacts, in the model's order).
+  StampVerdict addRoad(const ros::Time& stamp, const std::vector<double>& heights, double arrival);
   // `m` without time; the channels and values are already checked.
   StampVerdict addSample(const ros::Time& stamp, const Measurement& m, double arrival);
   // Samples whose road data is there, in stamp order. A sample whose stamp

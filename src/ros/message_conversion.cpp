@@ -1,5 +1,6 @@
 #include "ros/message_conversion.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -86,19 +87,22 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
     out.problem_kinds.push_back(JointStateProblem::kArrayLength);
   }
 
-  // side 0 = left (u1, v1), 1 = right (u2, v2); -1 = not in the message.
-  int index[2] = {-1, -1};
-  bool duplicate[2] = {false, false};
+  // Index of each configured joint in the message; -1 = not in the message.
+  const std::vector<SuspensionJoints::Joint> wanted = joints.resolved();
+  std::vector<int> index(wanted.size(), -1);
+  std::vector<bool> duplicate(wanted.size(), false);
   for (std::size_t i = 0; i < n; ++i) {
     const std::string& name = msg.name[i];
     int side = -1;
-    if (name == joints.left)
-      side = 0;
-    else if (name == joints.right)
-      side = 1;
+    for (std::size_t k = 0; k < wanted.size(); ++k) {
+      if (name == wanted[k].name) side = static_cast<int>(k);
+    }
     if (side < 0) {
-      out.problems.push_back("unknown joint name '" + name + "' (expected '" + joints.left +
-                             "' or '" + joints.right + "'); ignored");
+      std::string expected;
+      for (std::size_t k = 0; k < wanted.size(); ++k) {
+        expected += (k == 0 ? "'" : k + 1 == wanted.size() ? "' or '" : "', '") + wanted[k].name;
+      }
+      out.problems.push_back("unknown joint name '" + name + "' (expected " + expected + "'); ignored");
       out.problem_kinds.push_back(JointStateProblem::kUnknownJoint);
       continue;
     }
@@ -106,10 +110,11 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
     index[side] = static_cast<int>(i);
   }
 
-  double values[4];
-  bool observed[4] = {false, false, false, false};
-  for (int side = 0; side < 2; ++side) {
-    const std::string& name = side == 0 ? joints.left : joints.right;
+  const int channels = joints.channelCount();
+  std::vector<double> values(channels, 0.0);
+  std::vector<bool> observed(channels, false);
+  for (std::size_t side = 0; side < wanted.size(); ++side) {
+    const std::string& name = wanted[side].name;
     if (duplicate[side]) {
       out.problems.push_back("joint '" + name + "' appears more than once; ignored");
       out.problem_kinds.push_back(JointStateProblem::kDuplicateJoint);
@@ -118,7 +123,7 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
     if (index[side] < 0) continue;
     const auto take = [&](const std::vector<double>& array, bool usable, int channel,
                           const char* field) {
-      if (!usable || array.empty()) return;
+      if (!usable || array.empty() || channel < 0) return;
       const double v = array[index[side]];
       if (std::isnan(v)) {  // not observed
         ++out.nan_elements;
@@ -132,12 +137,12 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
       values[channel] = v;
       observed[channel] = true;
     };
-    take(msg.position, positions_ok, side == 0 ? kChannelU1 : kChannelU2, "position");
-    take(msg.velocity, velocities_ok, side == 0 ? kChannelV1 : kChannelV2, "velocity");
+    take(msg.position, positions_ok, wanted[side].position, "position");
+    take(msg.velocity, velocities_ok, wanted[side].velocity, "velocity");
   }
 
   std::vector<double> kept;
-  for (int c = 0; c < 4; ++c) {
+  for (int c = 0; c < channels; ++c) {
     if (!observed[c]) continue;
     out.measurement.channels.push_back(c);
     kept.push_back(values[c]);
@@ -152,22 +157,84 @@ sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ro
     throw std::invalid_argument("jointStateFromMeasurement: " + std::to_string(m.channels.size()) +
                                 " channels but " + std::to_string(m.values.size()) + " values");
   }
+  const int channels = joints.channelCount();
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  double values[4] = {nan, nan, nan, nan};
+  std::vector<double> values(channels, nan);
   for (std::size_t i = 0; i < m.channels.size(); ++i) {
     const int c = m.channels[i];
-    if (c < 0 || c > 3) {
+    if (c < 0 || c >= channels) {
       throw std::invalid_argument("jointStateFromMeasurement: channel " + std::to_string(c) +
-                                  " is not one of u1, u2, v1, v2 (0..3)");
+                                  " is not one of the model's " + std::to_string(channels) +
+                                  " channels (0.." + std::to_string(channels - 1) + ")");
     }
     values[c] = m.values(static_cast<Eigen::Index>(i));
   }
   sensor_msgs::JointState js;
   js.header.stamp = stamp;
-  js.name = {joints.left, joints.right};
-  js.position = {values[kChannelU1], values[kChannelU2]};
-  js.velocity = {values[kChannelV1], values[kChannelV2]};
+  for (const auto& joint : joints.resolved()) {
+    js.name.push_back(joint.name);
+    js.position.push_back(joint.position >= 0 ? values[joint.position] : nan);
+    js.velocity.push_back(joint.velocity >= 0 ? values[joint.velocity] : nan);
+  }
   return js;
+}
+
+std::vector<SuspensionJoints::Joint> SuspensionJoints::resolved() const {
+  if (!joints.empty()) return joints;
+  return {{left, kChannelU1, kChannelV1}, {right, kChannelU2, kChannelV2}};
+}
+
+int SuspensionJoints::channelCount() const { return joints.empty() ? 4 : channels; }
+
+SuspensionJoints suspensionJoints(const ModelType& type, const std::vector<std::string>& names) {
+  SuspensionJoints out;
+  const auto& suspensions = type.suspensions();
+  if (names.size() != suspensions.size()) {
+    throw std::invalid_argument("suspensionJoints: " + std::to_string(names.size()) +
+                                " joint names for " + std::to_string(suspensions.size()) +
+                                " suspensions");
+  }
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    out.joints.push_back({names[k], suspensions[k].position_channel, suspensions[k].velocity_channel});
+  }
+  out.channels = static_cast<int>(type.channelNames().size());
+  if (type.name() == "roll_plane") {
+    out.left = names[0];
+    out.right = names[1];
+  }
+  return out;
+}
+
+RoadHeights roadHeightsMessage(const ros::Time& stamp, const std::vector<std::string>& contacts,
+                               const std::vector<double>& heights) {
+  RoadHeights r;
+  r.header.stamp = stamp;
+  r.contacts = contacts;
+  r.heights = heights;
+  return r;
+}
+
+std::string roadHeightsInOrder(const RoadHeights& msg, const std::vector<std::string>& contacts,
+                               std::vector<double>* heights) {
+  if (msg.contacts.size() != msg.heights.size()) {
+    return std::to_string(msg.contacts.size()) + " contacts but " +
+           std::to_string(msg.heights.size()) + " heights";
+  }
+  heights->assign(contacts.size(), 0.0);
+  std::vector<bool> seen(contacts.size(), false);
+  for (std::size_t i = 0; i < msg.contacts.size(); ++i) {
+    const auto it = std::find(contacts.begin(), contacts.end(), msg.contacts[i]);
+    if (it == contacts.end()) return "unknown contact '" + msg.contacts[i] + "'";
+    const std::size_t c = static_cast<std::size_t>(it - contacts.begin());
+    if (seen[c]) return "contact '" + msg.contacts[i] + "' given twice";
+    if (!std::isfinite(msg.heights[i])) return "height of '" + msg.contacts[i] + "' is not finite";
+    seen[c] = true;
+    (*heights)[c] = msg.heights[i];
+  }
+  for (std::size_t c = 0; c < contacts.size(); ++c) {
+    if (!seen[c]) return "no height for contact '" + contacts[c] + "'";
+  }
+  return "";
 }
 
 RoadProfile roadProfileMessage(const ros::Time& stamp, double left, double right) {

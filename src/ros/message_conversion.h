@@ -6,6 +6,7 @@
 
 #include <pc_ekf/ParameterEstimate.h>
 #include <pc_ekf/ParameterPdf.h>
+#include <pc_ekf/RoadHeights.h>
 #include <pc_ekf/RoadProfile.h>
 #include <ros/time.h>
 #include <sensor_msgs/JointState.h>
@@ -19,6 +20,7 @@
 #include "filter/one_step_filter.h"
 #include "filter/predictive_check.h"
 #include "filter/uncertain_parameters.h"
+#include "io/model_type.h"
 #include "pc/pc_statistics.h"
 #include "pc/polynomial_basis.h"
 
@@ -39,11 +41,24 @@ ros::Time timeFromSeconds(double seconds);
 
 // ---- suspension measurements (sensor_msgs/JointState) ----
 
-// Joint names of the two suspensions; configurable (INTERFACE.md).
+// Joint names of the suspensions and the channels each carries; configurable.
+// Default: the roll plane's two (left, right); `joints` (e.g. from
+// suspensionJoints()) for any model.
 struct SuspensionJoints {
   std::string left = "left_suspension";    // tyre 1: position u1, velocity v1
   std::string right = "right_suspension";  // tyre 2: position u2, velocity v2
+  struct Joint {
+    std::string name;
+    int position = -1, velocity = -1;  // channel indices (-1: the field is not measured)
+  };
+  std::vector<Joint> joints;  // empty: {left, right} above
+  int channels = 4;           // the model's channel count when `joints` is given
+  std::vector<Joint> resolved() const;
+  int channelCount() const;
 };
+
+// The joints of a model type with the configured names (node.joint_names).
+SuspensionJoints suspensionJoints(const ModelType& type, const std::vector<std::string>& names);
 
 // Channel order of the model (RollPlaneModel::channelNames()): u1, u2, v1, v2.
 constexpr int kChannelU1 = 0, kChannelU2 = 1, kChannelV1 = 2, kChannelV2 = 3;
@@ -77,6 +92,12 @@ sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ro
 
 // ---- road ----
 RoadProfile roadProfileMessage(const ros::Time& stamp, double left, double right);
+RoadHeights roadHeightsMessage(const ros::Time& stamp, const std::vector<std::string>& contacts,
+                               const std::vector<double>& heights);
+// The heights in the order of `contacts` (the model's); "" or why the message
+// does not give each of them exactly once with a finite height.
+std::string roadHeightsInOrder(const RoadHeights& msg, const std::vector<std::string>& contacts,
+                               std::vector<double>* heights);
 
 // ---- estimates (pc_ekf/ParameterEstimate) ----
 

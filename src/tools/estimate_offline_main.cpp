@@ -40,20 +40,15 @@ int main(int argc, char** argv) {
     // A bag supplies the road (replacing the config's) and the samples.
     std::shared_ptr<const ContactRoad> bag_road;
     MeasurementSeries series;
-    if (args.has("--bag") && !config.model_type->twoContacts()) {
-      return args.badInput(config.source + ": model " + config.model_type->name() +
-                           ": bags carry two suspensions (road/profile); give --measurements "
-                           "(CSV with the model's channels) or no data file");
-    }
     if (args.has("--bag")) {
-      BagRecord bag = readBag(args["--bag"]);
+      BagRecord bag = readBag(args["--bag"], bagReadOptions(config));
       for (std::size_t i = 0; i < bag.warnings.size() && i < 5; ++i) {
         std::cerr << "[bag] " << args["--bag"] << ": " << bag.warnings[i] << "\n";
       }
       if (bag.warnings.size() > 5) {
         std::cerr << "[bag] ... and " << bag.warnings.size() - 5 << " more warnings\n";
       }
-      bag_road = std::make_shared<SampledRoad>(bag.road.t, bag.road.left, bag.road.right);
+      bag_road = std::make_shared<SampledRoad>(bag.road_contacts.t, bag.road_contacts.heights);
       series = std::move(bag.samples);
     }
     const auto model = makeModel(config, makeRoad(config, bag_road));

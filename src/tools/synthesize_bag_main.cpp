@@ -69,11 +69,6 @@ int main(int argc, char** argv) {
                       ": key 'road.source' is topic; synthesize_bag needs an analytic or series "
                       "road to simulate");
     }
-    if (!config.model_type->twoContacts()) {
-      return args.badInput(config.source + ": model " + config.model_type->name() +
-                           ": synthesize_bag writes two-suspension bags (road/profile) only; "
-                           "estimate_offline without data files simulates this model");
-    }
     const auto road = makeRoad(config);
     const auto model = makeModel(config, road);
     const MeasurementSeries samples = synthesizeFromConfig(config, *model, seed);
@@ -88,7 +83,13 @@ int main(int argc, char** argv) {
       return args.badInput("--road-rate " + args["--road-rate"] + " gives " + std::to_string(count) +
                       " road messages over " + std::to_string(t_last) + " s; too many");
     }
-    bag.road = sampleRoad(*road, t_last, road_rate);
+    if (config.model_type->twoContacts()) {
+      bag.road = sampleRoad(*road, t_last, road_rate);
+    } else {
+      bag.contacts = config.model_type->contactNames();
+      bag.road_contacts = sampleContactRoad(*road, t_last, road_rate);
+      bag.joints = suspensionJoints(*config.model_type, config.node.joint_names);
+    }
     bag.samples = samples;
 
     const ParameterMapping mapping(*model, config.uncertain);
