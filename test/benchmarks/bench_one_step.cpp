@@ -68,6 +68,14 @@ BENCHMARK(BM_OneStepPaper)
     ->Args({40, 0})->Args({40, 1})->Args({40, 2})
     ->Iterations(1)->Unit(benchmark::kMillisecond);
 
+// The full car (config/full_car_bump.yaml: 14 states, 8 channels, n = 3,
+// p = 3, S = 20, Q = 40, dt = 0.03 s).
+void BM_OneStepFullCar(benchmark::State& state) {
+  const Scenario s = makeScenario(loadConfigFile(configPath("full_car_bump.yaml")));
+  reportLatency(state, s, static_cast<int>(state.range(0)));
+}
+BENCHMARK(BM_OneStepFullCar)->Arg(20)->Iterations(1)->Unit(benchmark::kMillisecond);
+
 // 1 kHz stream: N = 3000 over 3 s (dt = 1 ms).
 void BM_OneStep1kHz(benchmark::State& state) {
   const auto integration = static_cast<Integration>(state.range(1));

@@ -7,8 +7,7 @@
 namespace pc_ekf::bench {
 namespace {
 
-void BM_ReferencePosteriorCaseB(benchmark::State& state) {
-  const Scenario s = makeScenario(paperConfig(100));
+void referencePosterior(benchmark::State& state, const Scenario& s) {
   const ParameterMapping mapping(*s.model, s.config.uncertain);
   ReferencePosteriorSettings ps = makeReferenceSettings(s.config);
   ps.threads = static_cast<int>(state.range(0));
@@ -31,7 +30,16 @@ void BM_ReferencePosteriorCaseB(benchmark::State& state) {
   state.counters["modes"] = static_cast<double>(p.modes.size());
   state.counters["border_mass"] = p.border_mass;
 }
+void BM_ReferencePosteriorCaseB(benchmark::State& state) {
+  referencePosterior(state, makeScenario(paperConfig(100)));
+}
 BENCHMARK(BM_ReferencePosteriorCaseB)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+// The full car (config/full_car_bump.yaml: n = 3, N = 100): the posterior in three dimensions.
+void BM_ReferencePosteriorFullCar(benchmark::State& state) {
+  referencePosterior(state, makeScenario(loadConfigFile(configPath("full_car_bump.yaml"))));
+}
+BENCHMARK(BM_ReferencePosteriorFullCar)->Arg(2)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
 
 }  // namespace
 }  // namespace pc_ekf::bench
