@@ -7,6 +7,8 @@
 # to the truth and to estimate_offline on the same bag. Stops exactly what it
 # started (by PID, also on Ctrl-C or failure).
 #   --samples "10 100"  the sample counts to run (default both)
+#   --model full_car    instead: the 7-DOF full car (config/full_car_bump.yaml,
+#                       N = 100, road/heights and four suspension joints)
 #   --node-args "ARGS"  extra estimator_node arguments, e.g. "_node/publish_pdf:=false"
 #   --hold              then loop the last bag in real time into a fresh
 #                       estimator_node until Enter / Ctrl-C (rostopic echo/hz,
@@ -17,18 +19,26 @@ source "$here/lib/common.sh"
 source "$here/lib/roscore.sh"
 
 sample_counts="10 100"
+model=roll_plane
 node_args=""
 hold=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --samples) sample_counts=${2:?--samples needs a list, e.g. \"10 100\"}; shift ;;
     --node-args) node_args=${2?--node-args needs a value}; shift ;;
+    --model) model=${2:?--model needs roll_plane or full_car}; shift ;;
     --hold) hold=1 ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
     *) echo "demo.sh: unknown option '$1'" >&2; exit 2 ;;
   esac
   shift
 done
+
+case "$model" in
+  roll_plane) base_config="$PC_EKF_ROOT/config/speed_bump.yaml"; stem=speed_bump ;;
+  full_car) base_config="$PC_EKF_ROOT/config/full_car_bump.yaml"; stem=full_car; sample_counts=100 ;;
+  *) echo "demo.sh: unknown model '$model' (roll_plane or full_car)" >&2; exit 2 ;;
+esac
 
 trap pc_ekf_stop_owned EXIT
 trap 'exit 130' INT TERM  # through the EXIT trap
@@ -58,10 +68,10 @@ demo_fail() {
 # demo_run N: one bag of N samples through the graph and offline; prints its
 # table. (Called in an `||` list, where `set -e` is off: every step is checked.)
 demo_run() {
-  local n=$1 config="$PC_EKF_ROOT/config/speed_bump.yaml"
-  local bag="$out/speed_bump_n$n.bag" run="$out/n$n"
+  local n=$1 config=$base_config
+  local bag="$out/${stem}_n$n.bag" run="$out/n$n"
   mkdir -p "$run"
-  if [ "$n" != 10 ]; then  # the paper's file with sampling.samples = N
+  if [ "$model" = roll_plane ] && [ "$n" != 10 ]; then  # the paper's file with sampling.samples = N
     config="$out/speed_bump_n$n.yaml"
     sed -E "/^sampling:/,/^[a-z]/ s/^(  samples:) *10\b/\1 $n/" \
       "$PC_EKF_ROOT/config/speed_bump.yaml" >"$config"
@@ -108,7 +118,12 @@ demo_run() {
   pc_ekf_stop_group "$estimator" estimator_node
 }
 
-echo "Estimating the added mass M and its position d_CG on the paper's speed bump"
+if [ "$model" = full_car ]; then
+  echo "Estimating the added mass M and its position (x_M forward of the rear axle, y_M left of"
+  echo "the right wheels) on the 7-DOF full car over an oblique speed bump"
+else
+  echo "Estimating the added mass M and its position d_CG on the paper's speed bump"
+fi
 echo "(square-root PC-EKF one step per sample; batch = ES-MDA on all samples)."
 for n in $sample_counts; do
   demo_run "$n" || exit 1
@@ -120,15 +135,15 @@ echo "err/std = (estimate - truth) / std. Logs: ${out#"$PC_EKF_ROOT"/}/"
 # Live: the last bag looped in real time; the estimator starts over at each
 # pass (stamps jump back), so there is always something to look at.
 last_n=${sample_counts##* }
-config="$PC_EKF_ROOT/config/speed_bump.yaml"
-[ -e "$out/speed_bump_n$last_n.yaml" ] && config="$out/speed_bump_n$last_n.yaml"
+config=$base_config
+[ -e "$out/${stem}_n$last_n.yaml" ] && config="$out/${stem}_n$last_n.yaml"
 # shellcheck disable=SC2086
 pc_ekf_start_owned estimator_node "$out/live_estimator_node.log" "$bin/estimator_node" \
   "_config_file:=$config" _node/reset_on_time_jump:=true __name:=estimator_node $node_args
 pc_ekf_start_owned replay_node "$out/live_replay_node.log" "$bin/replay_node" \
-  "_bag:=$out/speed_bump_n$last_n.bag" _rate:=1 _loop:=true __name:=replay_node
+  "_bag:=$out/${stem}_n$last_n.bag" _rate:=1 _loop:=true __name:=replay_node
 echo
-echo "Live: replay_node loops speed_bump_n$last_n.bag in real time into estimator_node."
+echo "Live: replay_node loops ${stem}_n$last_n.bag in real time into estimator_node."
 echo "In another shell:"
 echo "  source ${PC_EKF_WS#"$PC_EKF_ROOT"/}/devel/setup.bash"
 echo "  export ROS_MASTER_URI=$ROS_MASTER_URI ROS_HOSTNAME=${ROS_HOSTNAME:-}"

@@ -14,7 +14,8 @@ import math
 import re
 import sys
 
-LABELS = {"added_mass": "M [kg]", "added_mass_position": "d_CG [m]"}
+LABELS = {"added_mass": "M [kg]", "added_mass_position": "d_CG [m]",
+          "added_mass_x": "x_M [m]", "added_mass_y": "y_M [m]"}
 
 
 def by_name(result):
