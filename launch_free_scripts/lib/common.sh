@@ -32,10 +32,14 @@ pc_ekf_ensure_packages() {
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq "${missing[@]}" >&2 || return 1
 }
 
-# catkin workspace whose src/ links to the repository.
+# catkin workspace whose src/ links to the repository, and to the example
+# model plugin package (test/plugin_example/pc_ekf_quarter_car: a package of
+# its own, built against pc_ekf like a user's would be; its rostest is
+# estimator_plugin_model).
 pc_ekf_prepare_workspace() {
   mkdir -p "$PC_EKF_WS/src" "$PC_EKF_ROOT/.build"
   ln -sfn "$PC_EKF_ROOT" "$PC_EKF_WS/src/pc_ekf"
+  ln -sfn "$PC_EKF_ROOT/test/plugin_example/pc_ekf_quarter_car" "$PC_EKF_WS/src/pc_ekf_quarter_car"
 }
 
 # catkin_make in the workspace; extra arguments go to catkin_make.

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "io/checkpoint.h"
+#include "ros/model_plugins.h"
 
 namespace pc_ekf {
 namespace {
@@ -100,7 +101,7 @@ EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* 
   if (!file.empty()) {
     root = loadYamlFile(file);
     if (root.IsNull()) root = YAML::Node(YAML::NodeType::Map);
-    if (!root.IsMap()) return parseConfig(root, file);  // reports the wrong root type
+    if (!root.IsMap()) return parseConfig(root, file, modelRegistryWithPlugins());  // reports the wrong root type
     source = file;
   }
   if (params.size() > 0) {
@@ -108,7 +109,7 @@ EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* 
     source = source.empty() ? "rosparam " + ns : source + " + rosparam " + ns;
   }
   if (source.empty()) source = "defaults (no ~config_file, no private parameters)";
-  EstimatorConfig config = parseConfig(root, source);
+  EstimatorConfig config = parseConfig(root, source, modelRegistryWithPlugins());
   if (config_hash) *config_hash = fnv1a64(canonicalConfigText(root));
   return config;
 }

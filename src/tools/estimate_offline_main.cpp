@@ -6,6 +6,7 @@
 
 #include "io/bag_io.h"
 #include "io/estimation_setup.h"
+#include "ros/model_plugins.h"
 #include "io/measurement_csv.h"
 #include "io/offline_estimation.h"
 #include "tools/command_line.h"
@@ -30,7 +31,7 @@ int main(int argc, char** argv) {
     return args.badInput("give either --measurements or --bag, not both");
   }
   return args.run([&] {
-    EstimatorConfig config = loadConfigFile(args["--config"]);
+    EstimatorConfig config = loadConfigFile(args["--config"], modelRegistryWithPlugins());
     if (args.has("--update")) config.update = updateRuleFromString(args["--update"]);
     const EstimationMethod method =
         estimationMethodFromString(args.has("--method") ? args["--method"] : "one_step");

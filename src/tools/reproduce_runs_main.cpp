@@ -14,6 +14,7 @@
 #include "filter/reference_posterior.h"
 #include "filter/synthetic_data.h"
 #include "io/estimation_setup.h"
+#include "ros/model_plugins.h"
 #include "io/offline_estimation.h"
 
 namespace {
@@ -55,7 +56,7 @@ int main(int argc, char** argv) {
     return usage("missing or unpaired arguments");
   }
   try {
-    EstimatorConfig config = loadConfigFile(a["--config"]);
+    EstimatorConfig config = loadConfigFile(a["--config"], modelRegistryWithPlugins());
     config.sampling.samples = std::stoi(a["--samples"]);
     const auto seeds = split(a["--seeds"], '-');
     const std::uint64_t first = std::stoull(seeds.at(0)), last = std::stoull(seeds.at(1));

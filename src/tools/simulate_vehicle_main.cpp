@@ -9,6 +9,7 @@
 
 #include "filter/trajectory_simulation.h"
 #include "io/estimation_setup.h"
+#include "ros/model_plugins.h"
 #include "model/full_car_model.h"
 
 namespace {
@@ -47,7 +48,7 @@ int main(int argc, char** argv) {
     return 2;
   }
   try {
-    const EstimatorConfig c = loadConfigFile(argv[2]);
+    const EstimatorConfig c = loadConfigFile(argv[2], modelRegistryWithPlugins());
     const auto model = makeModel(c, makeRoad(c));
     const auto truth = truthModel(c, *model);
     const SyntheticDataSettings s = syntheticSettings(c, *truth, c.truth.seed);

@@ -10,6 +10,7 @@
 #include "filter/uncertain_parameters.h"
 #include "io/bag_io.h"
 #include "io/estimation_setup.h"
+#include "ros/model_plugins.h"
 #include "io/measurement_csv.h"
 #include "pc/polynomial_basis.h"
 #include "ros/message_conversion.h"
@@ -60,7 +61,7 @@ int main(int argc, char** argv) {
   }
 
   return args.run([&] {
-    const EstimatorConfig config = loadConfigFile(args["--config"]);
+    const EstimatorConfig config = loadConfigFile(args["--config"], modelRegistryWithPlugins());
     std::uint64_t seed = config.truth.seed;
     int status = 0;
     if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
