@@ -14,6 +14,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
 source "$here/lib/fuzz.sh"
 source "$here/lib/sanitize.sh"
+source "$here/lib/install_check.sh"
 
 check_colcon=0
 sanitize=0
@@ -62,6 +63,9 @@ if [ "$sanitize" -eq 1 ]; then
   unset ASAN_OPTIONS UBSAN_OPTIONS LSAN_OPTIONS
   pc_ekf_sanitize_results "$results" "$sanitizer_logs" "$PC_EKF_ROOT/.build/tests$suffix.log"
 fi
+
+# The install space: headers, libraries and tools usable by another package.
+[ "$sanitize" -eq 0 ] && pc_ekf_install_check "$results"
 
 # The install list covers every package used (a fresh machine has only it).
 mkdir -p "$results"

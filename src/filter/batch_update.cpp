@@ -1,10 +1,10 @@
-#include "filter/batch_update.h"
+#include "pc_ekf/filter/batch_update.h"
 
 #include <algorithm>
 #include <stdexcept>
 
-#include "filter/trajectory_simulation.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

@@ -8,10 +8,10 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "filter/kalman_update.h"
-#include "filter/measurement.h"
-#include "filter/pc_propagator.h"
-#include "filter/update_safeguards.h"
+#include "pc_ekf/filter/kalman_update.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/filter/update_safeguards.h"
 
 namespace pc_ekf {
 

@@ -1,13 +1,13 @@
-#include "filter/ensemble_kalman_filter.h"
+#include "pc_ekf/filter/ensemble_kalman_filter.h"
 
 #include <cmath>
 #include <stdexcept>
 #include <thread>
 
-#include "filter/kalman_update.h"
-#include "filter/one_step_filter.h"
-#include "pc/polynomial_basis.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/filter/kalman_update.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/pc/polynomial_basis.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

@@ -7,10 +7,10 @@
 #include <memory>
 #include <random>
 
-#include "filter/measurement.h"
-#include "filter/uncertain_parameters.h"
-#include "model/integrator.h"
-#include "model/mechanical_model.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf {
 

@@ -1,11 +1,11 @@
-#include "filter/health.h"
+#include "pc_ekf/filter/health.h"
 
 #include <cmath>
 #include <limits>
 #include <sstream>
 
-#include "pc/orthonormal_family.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/pc/orthonormal_family.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

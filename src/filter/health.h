@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "filter/kalman_update.h"
-#include "filter/pc_propagator.h"
+#include "pc_ekf/filter/kalman_update.h"
+#include "pc_ekf/filter/pc_propagator.h"
 
 namespace pc_ekf {
 

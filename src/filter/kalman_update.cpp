@@ -1,4 +1,4 @@
-#include "filter/kalman_update.h"
+#include "pc_ekf/filter/kalman_update.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "filter/measurement.h"
+#include "pc_ekf/filter/measurement.h"
 
 #include <stdexcept>
 

@@ -1,10 +1,10 @@
-#include "filter/one_step_filter.h"
+#include "pc_ekf/filter/one_step_filter.h"
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "pc/pc_statistics.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

@@ -6,11 +6,11 @@
 #include <Eigen/Dense>
 #include <memory>
 
-#include "filter/health.h"
-#include "filter/kalman_update.h"
-#include "filter/measurement.h"
-#include "filter/pc_propagator.h"
-#include "filter/update_safeguards.h"
+#include "pc_ekf/filter/health.h"
+#include "pc_ekf/filter/kalman_update.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/filter/update_safeguards.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "filter/pc_propagator.h"
+#include "pc_ekf/filter/pc_propagator.h"
 
 #include <algorithm>
 #include <cmath>

@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "filter/uncertain_parameters.h"
-#include "model/integrator.h"
-#include "model/mechanical_model.h"
-#include "pc/collocation_design.h"
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/pc/collocation_design.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 

@@ -1,12 +1,12 @@
-#include "filter/posterior_coarse_grid.h"
+#include "pc_ekf/filter/posterior_coarse_grid.h"
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "filter/posterior_residual.h"
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/posterior_residual.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf {
 

@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "filter/measurement.h"
-#include "filter/posterior_prior.h"
-#include "filter/uncertain_parameters.h"
-#include "model/integrator.h"
-#include "model/mechanical_model.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf {
 

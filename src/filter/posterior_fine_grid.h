@@ -8,11 +8,11 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "filter/posterior_coarse_grid.h"
-#include "filter/posterior_mode_search.h"
-#include "filter/posterior_prior.h"
-#include "filter/posterior_residual.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/filter/posterior_coarse_grid.h"
+#include "pc_ekf/filter/posterior_mode_search.h"
+#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/filter/posterior_residual.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "filter/posterior_mode_search.h"
+#include "pc_ekf/filter/posterior_mode_search.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,8 +7,8 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "filter/posterior_prior.h"
-#include "filter/posterior_residual.h"
+#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/filter/posterior_residual.h"
 
 namespace pc_ekf {
 

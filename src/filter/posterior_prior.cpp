@@ -1,4 +1,4 @@
-#include "filter/posterior_prior.h"
+#include "pc_ekf/filter/posterior_prior.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,8 +5,8 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "pc/germ.h"
-#include "pc/orthonormal_family.h"
+#include "pc_ekf/pc/germ.h"
+#include "pc_ekf/pc/orthonormal_family.h"
 
 namespace pc_ekf {
 

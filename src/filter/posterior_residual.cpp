@@ -1,11 +1,11 @@
-#include "filter/posterior_residual.h"
+#include "pc_ekf/filter/posterior_residual.h"
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
 
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf {
 

@@ -1,13 +1,13 @@
-#include "filter/predictive_check.h"
+#include "pc_ekf/filter/predictive_check.h"
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 #include <sstream>
 
-#include "filter/health.h"
-#include "filter/posterior_residual.h"
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/health.h"
+#include "pc_ekf/filter/posterior_residual.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf {
 

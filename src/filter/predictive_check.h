@@ -13,9 +13,9 @@
 #include <string>
 #include <vector>
 
-#include "filter/measurement.h"
-#include "model/integrator.h"
-#include "model/mechanical_model.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf {
 

@@ -1,5 +1,5 @@
 // Reference posterior, SPEC §3.5: orchestration of the four steps.
-#include "filter/reference_posterior.h"
+#include "pc_ekf/filter/reference_posterior.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,9 +8,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "filter/posterior_fine_grid.h"
-#include "filter/posterior_mode_search.h"
-#include "filter/posterior_prior.h"
+#include "pc_ekf/filter/posterior_fine_grid.h"
+#include "pc_ekf/filter/posterior_mode_search.h"
+#include "pc_ekf/filter/posterior_prior.h"
 
 namespace pc_ekf {
 

@@ -11,14 +11,14 @@
 #include <string>
 #include <vector>
 
-#include "filter/measurement.h"
-#include "filter/posterior_coarse_grid.h"
-#include "filter/posterior_mode_search.h"
-#include "filter/posterior_residual.h"
-#include "filter/uncertain_parameters.h"
-#include "model/integrator.h"
-#include "model/mechanical_model.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/posterior_coarse_grid.h"
+#include "pc_ekf/filter/posterior_mode_search.h"
+#include "pc_ekf/filter/posterior_residual.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

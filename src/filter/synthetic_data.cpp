@@ -1,11 +1,11 @@
-#include "filter/synthetic_data.h"
+#include "pc_ekf/filter/synthetic_data.h"
 
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <stdexcept>
 
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,10 +1,10 @@
-#include "filter/uncertain_parameters.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
 
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "pc/orthonormal_family.h"
+#include "pc_ekf/pc/orthonormal_family.h"
 
 namespace pc_ekf {
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "model/mechanical_model.h"
-#include "pc/germ.h"
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/pc/germ.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 

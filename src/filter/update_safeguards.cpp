@@ -1,4 +1,4 @@
-#include "filter/update_safeguards.h"
+#include "pc_ekf/filter/update_safeguards.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "io/bag_check.h"
+#include "pc_ekf/io/bag_check.h"
 
 #include <rosbag/chunked_file.h>
 

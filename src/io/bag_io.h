@@ -16,10 +16,10 @@
 #include <string>
 #include <vector>
 
-#include "filter/measurement.h"
-#include "io/estimator_config.h"
-#include "io/measurement_csv.h"
-#include "ros/message_conversion.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
 

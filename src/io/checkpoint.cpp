@@ -1,4 +1,4 @@
-#include "io/checkpoint.h"
+#include "pc_ekf/io/checkpoint.h"
 
 #include <fcntl.h>
 #include <unistd.h>

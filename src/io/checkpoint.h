@@ -13,8 +13,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "filter/measurement.h"
-#include "io/measurement_csv.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/io/measurement_csv.h"
 
 namespace YAML {
 class Node;

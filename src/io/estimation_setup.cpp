@@ -1,8 +1,8 @@
-#include "io/estimation_setup.h"
+#include "pc_ekf/io/estimation_setup.h"
 
 #include <cmath>
 
-#include "io/measurement_csv.h"
+#include "pc_ekf/io/measurement_csv.h"
 
 namespace pc_ekf {
 

@@ -5,14 +5,14 @@
 
 #include <memory>
 
-#include "filter/ensemble_kalman_filter.h"
-#include "filter/one_step_filter.h"
-#include "filter/pc_propagator.h"
-#include "filter/reference_posterior.h"
-#include "filter/synthetic_data.h"
-#include "io/estimator_config.h"
-#include "io/measurement_csv.h"
-#include "model/roll_plane_model.h"
+#include "pc_ekf/filter/ensemble_kalman_filter.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/filter/synthetic_data.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "io/estimator_config.h"
+#include "pc_ekf/io/estimator_config.h"
 
 #include <yaml-cpp/yaml.h>
 
@@ -9,8 +9,8 @@
 #include <set>
 #include <sstream>
 
-#include "io/yaml_reader.h"
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/io/yaml_reader.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 namespace {

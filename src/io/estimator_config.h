@@ -10,17 +10,17 @@
 #include <string>
 #include <vector>
 
-#include "filter/kalman_update.h"
-#include "filter/measurement.h"
-#include "filter/synthetic_data.h"
-#include "filter/uncertain_parameters.h"
-#include "filter/update_safeguards.h"
-#include "io/model_type.h"
-#include "model/integrator.h"
-#include "model/road_input.h"
-#include "model/roll_plane_model.h"
-#include "pc/collocation_design.h"
-#include "pc/germ.h"
+#include "pc_ekf/filter/kalman_update.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/synthetic_data.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/filter/update_safeguards.h"
+#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/road_input.h"
+#include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/pc/collocation_design.h"
+#include "pc_ekf/pc/germ.h"
 
 namespace YAML {
 class Node;

@@ -3,10 +3,10 @@
 // one suspension joint per corner.
 #include <limits>
 
-#include "io/model_type.h"
-#include "io/yaml_reader.h"
-#include "model/full_car_model.h"
-#include "model/full_car_road.h"
+#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/io/yaml_reader.h"
+#include "pc_ekf/model/full_car_model.h"
+#include "pc_ekf/model/full_car_road.h"
 
 namespace pc_ekf {
 namespace {

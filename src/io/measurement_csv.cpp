@@ -1,4 +1,4 @@
-#include "io/measurement_csv.h"
+#include "pc_ekf/io/measurement_csv.h"
 
 #include <cmath>
 #include <fstream>

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "filter/measurement.h"
+#include "pc_ekf/filter/measurement.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "io/model_type.h"
+#include "pc_ekf/io/model_type.h"
 
 namespace pc_ekf {
 

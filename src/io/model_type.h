@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "model/mechanical_model.h"
-#include "model/road_input.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/model/road_input.h"
 
 namespace pc_ekf {
 

@@ -1,13 +1,13 @@
-#include "io/offline_estimation.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 #include <chrono>
 #include <stdexcept>
 
-#include "filter/batch_update.h"
-#include "filter/ensemble_kalman_filter.h"
-#include "filter/one_step_filter.h"
-#include "filter/reference_posterior.h"
-#include "io/estimation_setup.h"
+#include "pc_ekf/filter/batch_update.h"
+#include "pc_ekf/filter/ensemble_kalman_filter.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/io/estimation_setup.h"
 
 namespace pc_ekf {
 

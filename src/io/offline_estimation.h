@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "filter/measurement.h"
-#include "filter/predictive_check.h"
-#include "io/estimator_config.h"
-#include "model/mechanical_model.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 

@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "io/offline_estimation.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {

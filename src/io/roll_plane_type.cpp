@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <limits>
 
-#include "io/model_type.h"
-#include "io/yaml_reader.h"
-#include "model/roll_plane_model.h"
+#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/io/yaml_reader.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {

@@ -1,10 +1,10 @@
-#include "io/yaml_reader.h"
+#include "pc_ekf/io/yaml_reader.h"
 
 #include <cmath>
 #include <limits>
 #include <sstream>
 
-#include "io/estimator_config.h"
+#include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {
 

@@ -1,11 +1,11 @@
 // Full-car ride model: parameter checks and the batched right-hand side.
-#include "model/full_car_model.h"
+#include "pc_ekf/model/full_car_model.h"
 
 #include <cmath>
 #include <stdexcept>
 #include <utility>
 
-#include "model/smooth_functions.h"
+#include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
 

@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "model/mechanical_model.h"
-#include "model/road_input.h"
-#include "model/roll_plane_model.h"  // DamperLaw
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/model/road_input.h"
+#include "pc_ekf/model/roll_plane_model.h"  // DamperLaw
 
 namespace pc_ekf {
 

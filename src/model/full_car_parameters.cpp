@@ -3,7 +3,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "model/full_car_model.h"
+#include "pc_ekf/model/full_car_model.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "model/full_car_road.h"
+#include "pc_ekf/model/full_car_road.h"
 
 #include <algorithm>
 #include <cmath>

@@ -6,7 +6,7 @@
 
 #include <vector>
 
-#include "model/road_input.h"
+#include "pc_ekf/model/road_input.h"
 
 namespace pc_ekf {
 

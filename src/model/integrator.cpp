@@ -1,5 +1,5 @@
 // Explicit Runge-Kutta between the input's kinks (SPEC §1.5, §5).
-#include "model/integrator.h"
+#include "pc_ekf/model/integrator.h"
 
 #include <algorithm>
 #include <cmath>

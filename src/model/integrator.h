@@ -6,7 +6,7 @@
 #include <Eigen/Dense>
 #include <string>
 
-#include "model/mechanical_model.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "model/mechanical_model.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "model/road_input.h"
+#include "pc_ekf/model/road_input.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Roll-plane vehicle model (SPEC §1): parameter checks and batched right-hand side.
-#include "model/roll_plane_model.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
-#include "model/smooth_functions.h"
+#include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
 

@@ -7,8 +7,8 @@
 
 #include <memory>
 
-#include "model/mechanical_model.h"
-#include "model/road_input.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/model/road_input.h"
 
 namespace pc_ekf {
 

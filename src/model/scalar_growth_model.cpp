@@ -1,5 +1,5 @@
 // y' = a y (the paper's appendix system), batched over parameter columns [a, y0].
-#include "model/scalar_growth_model.h"
+#include "pc_ekf/model/scalar_growth_model.h"
 
 #include <cmath>
 #include <stdexcept>

@@ -3,7 +3,7 @@
 // one channel "y".
 #pragma once
 
-#include "model/mechanical_model.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf {
 

@@ -4,8 +4,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "model/roll_plane_model.h"
-#include "model/smooth_functions.h"
+#include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
 

@@ -1,7 +1,7 @@
 // Flat parameter vector of the roll-plane model, in the order of roll_plane_model.h.
 #include <stdexcept>
 
-#include "model/roll_plane_model.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 

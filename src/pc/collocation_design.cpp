@@ -1,10 +1,10 @@
-#include "pc/collocation_design.h"
+#include "pc_ekf/pc/collocation_design.h"
 
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 
-#include "pc/point_sets.h"
+#include "pc_ekf/pc/point_sets.h"
 
 namespace pc_ekf {
 

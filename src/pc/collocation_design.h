@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <string>
 
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 

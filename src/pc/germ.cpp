@@ -1,4 +1,4 @@
-#include "pc/germ.h"
+#include "pc_ekf/pc/germ.h"
 
 #include <sstream>
 #include <stdexcept>

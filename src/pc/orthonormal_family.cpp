@@ -1,4 +1,4 @@
-#include "pc/orthonormal_family.h"
+#include "pc_ekf/pc/orthonormal_family.h"
 
 #include <algorithm>
 #include <cmath>
@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "pc/special_functions.h"
+#include "pc_ekf/pc/special_functions.h"
 
 namespace pc_ekf {
 namespace {

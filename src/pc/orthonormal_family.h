@@ -5,7 +5,7 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "pc/germ.h"
+#include "pc_ekf/pc/germ.h"
 
 namespace pc_ekf {
 

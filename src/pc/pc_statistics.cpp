@@ -1,4 +1,4 @@
-#include "pc/pc_statistics.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 #include <algorithm>
 #include <cmath>

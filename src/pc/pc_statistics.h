@@ -6,7 +6,7 @@
 #include <Eigen/Dense>
 #include <cstdint>
 
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 

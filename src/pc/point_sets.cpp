@@ -1,9 +1,9 @@
-#include "pc/point_sets.h"
+#include "pc_ekf/pc/point_sets.h"
 
 #include <stdexcept>
 #include <string>
 
-#include "pc/orthonormal_family.h"
+#include "pc_ekf/pc/orthonormal_family.h"
 
 namespace pc_ekf {
 

@@ -5,7 +5,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "pc/germ.h"
+#include "pc_ekf/pc/germ.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 #include <stdexcept>
 #include <string>

@@ -1,4 +1,4 @@
-#include "pc/special_functions.h"
+#include "pc_ekf/pc/special_functions.h"
 
 #include <cmath>
 #include <limits>

@@ -1,4 +1,4 @@
-#include "ros/estimator_checkpoint.h"
+#include "pc_ekf/ros/estimator_checkpoint.h"
 
 #include <utility>
 #include <vector>

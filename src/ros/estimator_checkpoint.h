@@ -8,8 +8,8 @@
 #include <map>
 #include <string>
 
-#include "io/checkpoint.h"
-#include "ros/estimator_diagnostics.h"
+#include "pc_ekf/io/checkpoint.h"
+#include "pc_ekf/ros/estimator_diagnostics.h"
 
 namespace pc_ekf {
 

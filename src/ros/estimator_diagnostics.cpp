@@ -1,4 +1,4 @@
-#include "ros/estimator_diagnostics.h"
+#include "pc_ekf/ros/estimator_diagnostics.h"
 
 #include <sstream>
 

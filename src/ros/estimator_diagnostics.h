@@ -9,8 +9,8 @@
 #include <map>
 #include <string>
 
-#include "filter/health.h"
-#include "io/estimator_config.h"
+#include "pc_ekf/filter/health.h"
+#include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {
 

@@ -6,7 +6,7 @@
 #include <exception>
 #include <memory>
 
-#include "ros/estimator_ros.h"
+#include "pc_ekf/ros/estimator_ros.h"
 
 namespace {
 

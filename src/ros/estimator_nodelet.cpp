@@ -5,7 +5,7 @@
 #include <memory>
 #include <pluginlib/class_list_macros.hpp>
 
-#include "ros/estimator_ros.h"
+#include "pc_ekf/ros/estimator_ros.h"
 
 namespace pc_ekf {
 

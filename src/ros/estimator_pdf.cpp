@@ -1,4 +1,4 @@
-#include "ros/estimator_pdf.h"
+#include "pc_ekf/ros/estimator_pdf.h"
 
 #include <algorithm>
 #include <stdexcept>

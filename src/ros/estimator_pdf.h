@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "pc/pc_statistics.h"
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/pc/pc_statistics.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 

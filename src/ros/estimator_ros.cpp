@@ -1,4 +1,4 @@
-#include "ros/estimator_ros.h"
+#include "pc_ekf/ros/estimator_ros.h"
 
 #include <algorithm>
 #include <chrono>
@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <stdexcept>
 
-#include "io/estimation_setup.h"
-#include "ros/estimator_checkpoint.h"
-#include "ros/ros_config.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/estimator_checkpoint.h"
+#include "pc_ekf/ros/ros_config.h"
 
 namespace pc_ekf {
 namespace {

@@ -16,12 +16,12 @@
 #include <memory>
 #include <string>
 
-#include "filter/pc_propagator.h"
-#include "io/estimator_config.h"
-#include "ros/estimator_diagnostics.h"
-#include "ros/estimator_run.h"
-#include "ros/estimator_timeline.h"
-#include "ros/message_conversion.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/ros/estimator_diagnostics.h"
+#include "pc_ekf/ros/estimator_run.h"
+#include "pc_ekf/ros/estimator_timeline.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
 

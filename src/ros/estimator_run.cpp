@@ -1,13 +1,13 @@
-#include "ros/estimator_run.h"
+#include "pc_ekf/ros/estimator_run.h"
 
 #include <cmath>
 #include <sstream>
 
-#include "filter/batch_update.h"
-#include "filter/predictive_check.h"
-#include "io/estimation_setup.h"
-#include "pc/pc_statistics.h"
-#include "ros/message_conversion.h"
+#include "pc_ekf/filter/batch_update.h"
+#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/pc/pc_statistics.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
 namespace {

@@ -12,10 +12,10 @@
 #include <optional>
 #include <string>
 
-#include "filter/one_step_filter.h"
-#include "io/checkpoint.h"
-#include "io/estimator_config.h"
-#include "ros/estimator_pdf.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/io/checkpoint.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/ros/estimator_pdf.h"
 
 namespace pc_ekf {
 

@@ -1,11 +1,11 @@
-#include "ros/estimator_timeline.h"
+#include "pc_ekf/ros/estimator_timeline.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "io/estimator_config.h"
-#include "ros/message_conversion.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
 

@@ -11,9 +11,9 @@
 #include <optional>
 #include <vector>
 
-#include "filter/measurement.h"
-#include "io/measurement_csv.h"
-#include "model/road_input.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/model/road_input.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "ros/message_conversion.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 #include <algorithm>
 #include <cmath>
@@ -7,8 +7,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "filter/pc_propagator.h"
-#include "pc/germ.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/pc/germ.h"
 
 namespace pc_ekf {
 

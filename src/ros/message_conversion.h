@@ -15,14 +15,14 @@
 #include <string>
 #include <vector>
 
-#include "filter/health.h"
-#include "filter/measurement.h"
-#include "filter/one_step_filter.h"
-#include "filter/predictive_check.h"
-#include "filter/uncertain_parameters.h"
-#include "io/model_type.h"
-#include "pc/pc_statistics.h"
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/filter/health.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/pc/pc_statistics.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 

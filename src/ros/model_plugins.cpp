@@ -1,4 +1,4 @@
-#include "ros/model_plugins.h"
+#include "pc_ekf/ros/model_plugins.h"
 
 #include <pluginlib/class_loader.hpp>
 

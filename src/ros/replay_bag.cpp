@@ -1,4 +1,4 @@
-#include "ros/replay_bag.h"
+#include "pc_ekf/ros/replay_bag.h"
 
 #include <ros/serialization.h>
 #include <rosbag/view.h>
@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
-#include "io/bag_check.h"
+#include "pc_ekf/io/bag_check.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "ros/replay_handshake.h"
+#include "pc_ekf/ros/replay_handshake.h"
 
 #include <ros/console.h>
 

@@ -5,9 +5,9 @@
 
 #include <memory>
 
-#include "ros/replay_bag.h"
-#include "ros/replay_options.h"
-#include "ros/replay_player.h"
+#include "pc_ekf/ros/replay_bag.h"
+#include "pc_ekf/ros/replay_options.h"
+#include "pc_ekf/ros/replay_player.h"
 
 int main(int argc, char** argv) {
   ros::init(argc, argv, "replay_node");

@@ -1,4 +1,4 @@
-#include "ros/replay_options.h"
+#include "pc_ekf/ros/replay_options.h"
 
 #include <xmlrpcpp/XmlRpcValue.h>
 

@@ -1,4 +1,4 @@
-#include "ros/replay_player.h"
+#include "pc_ekf/ros/replay_player.h"
 
 #include <ros/console.h>
 #include <ros/master.h>

@@ -11,9 +11,9 @@
 #include <memory>
 #include <string>
 
-#include "ros/replay_bag.h"
-#include "ros/replay_handshake.h"
-#include "ros/replay_options.h"
+#include "pc_ekf/ros/replay_bag.h"
+#include "pc_ekf/ros/replay_handshake.h"
+#include "pc_ekf/ros/replay_options.h"
 
 namespace pc_ekf {
 

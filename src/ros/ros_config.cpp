@@ -1,4 +1,4 @@
-#include "ros/ros_config.h"
+#include "pc_ekf/ros/ros_config.h"
 
 #include <ros/param.h>
 
@@ -6,8 +6,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "io/checkpoint.h"
-#include "ros/model_plugins.h"
+#include "pc_ekf/io/checkpoint.h"
+#include "pc_ekf/ros/model_plugins.h"
 
 namespace pc_ekf {
 namespace {

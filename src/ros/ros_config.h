@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <string>
 
-#include "io/estimator_config.h"
+#include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {
 

@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "io/bag_io.h"
-#include "io/estimator_config.h"
-#include "io/measurement_csv.h"
+#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/measurement_csv.h"
 
 namespace pc_ekf {
 

@@ -4,12 +4,12 @@
 #include <iostream>
 #include <string>
 
-#include "io/bag_io.h"
-#include "io/estimation_setup.h"
-#include "ros/model_plugins.h"
-#include "io/measurement_csv.h"
-#include "io/offline_estimation.h"
-#include "tools/command_line.h"
+#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/model_plugins.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/io/offline_estimation.h"
+#include "pc_ekf/tools/command_line.h"
 
 namespace {
 

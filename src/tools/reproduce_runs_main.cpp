@@ -11,11 +11,11 @@
 #include <string>
 #include <vector>
 
-#include "filter/reference_posterior.h"
-#include "filter/synthetic_data.h"
-#include "io/estimation_setup.h"
-#include "ros/model_plugins.h"
-#include "io/offline_estimation.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/filter/synthetic_data.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/model_plugins.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 namespace {
 

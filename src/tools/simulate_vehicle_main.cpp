@@ -7,10 +7,10 @@
 #include <iostream>
 #include <string>
 
-#include "filter/trajectory_simulation.h"
-#include "io/estimation_setup.h"
-#include "ros/model_plugins.h"
-#include "model/full_car_model.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/model_plugins.h"
+#include "pc_ekf/model/full_car_model.h"
 
 namespace {
 

@@ -7,14 +7,14 @@
 #include <iostream>
 #include <string>
 
-#include "filter/uncertain_parameters.h"
-#include "io/bag_io.h"
-#include "io/estimation_setup.h"
-#include "ros/model_plugins.h"
-#include "io/measurement_csv.h"
-#include "pc/polynomial_basis.h"
-#include "ros/message_conversion.h"
-#include "tools/command_line.h"
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/model_plugins.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/pc/polynomial_basis.h"
+#include "pc_ekf/ros/message_conversion.h"
+#include "pc_ekf/tools/command_line.h"
 
 namespace {
 

@@ -11,9 +11,9 @@
 #include <algorithm>
 
 #include "bench_support.h"
-#include "filter/ensemble_kalman_filter.h"
-#include "filter/reference_posterior.h"
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/ensemble_kalman_filter.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf::bench {
 namespace {

@@ -7,7 +7,7 @@
 #include <random>
 
 #include "bench_support.h"
-#include "model/integrator.h"
+#include "pc_ekf/model/integrator.h"
 
 namespace pc_ekf::bench {
 namespace {

@@ -15,8 +15,8 @@
 #include <random>
 
 #include "bench_support.h"
-#include "filter/trajectory_simulation.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf::bench {
 namespace {

@@ -5,8 +5,8 @@
 // split into the forecast (simulating the Q collocation points through all
 // sample times) and what comes after it (stacking, projection, Kalman update).
 #include "bench_support.h"
-#include "filter/batch_update.h"
-#include "filter/trajectory_simulation.h"
+#include "pc_ekf/filter/batch_update.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf::bench {
 namespace {

@@ -14,10 +14,10 @@
 #include <string>
 #include <vector>
 
-#include "filter/one_step_filter.h"
-#include "filter/pc_propagator.h"
-#include "io/estimation_setup.h"
-#include "io/estimator_config.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf::bench {
 

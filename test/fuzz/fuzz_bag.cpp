@@ -16,7 +16,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "io/bag_io.h"
+#include "pc_ekf/io/bag_io.h"
 
 namespace {
 

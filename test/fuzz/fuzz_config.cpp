@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "io/estimator_config.h"
+#include "pc_ekf/io/estimator_config.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(reinterpret_cast<const char*>(data), size);

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "io/measurement_csv.h"
+#include "pc_ekf/io/measurement_csv.h"
 
 namespace {
 

@@ -10,7 +10,7 @@
 #include <iostream>
 
 #include "estimator_test_support.h"
-#include "io/checkpoint.h"
+#include "pc_ekf/io/checkpoint.h"
 
 namespace pc_ekf::test {
 namespace {

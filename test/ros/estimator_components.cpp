@@ -4,9 +4,9 @@
 #include <limits>
 
 #include "estimator_test_support.h"
-#include "ros/estimator_run.h"
-#include "ros/estimator_timeline.h"
-#include "ros/ros_config.h"
+#include "pc_ekf/ros/estimator_run.h"
+#include "pc_ekf/ros/estimator_timeline.h"
+#include "pc_ekf/ros/ros_config.h"
 
 namespace pc_ekf::test {
 namespace {

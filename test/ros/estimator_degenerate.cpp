@@ -3,7 +3,7 @@
 #include <limits>
 
 #include "estimator_test_support.h"
-#include "ros/estimator_run.h"
+#include "pc_ekf/ros/estimator_run.h"
 
 namespace pc_ekf::test {
 namespace {

@@ -27,9 +27,9 @@
 #include <string>
 #include <vector>
 
-#include "io/estimation_setup.h"
-#include "io/measurement_csv.h"
-#include "ros/message_conversion.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf::test {
 

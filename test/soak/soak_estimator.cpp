@@ -15,11 +15,11 @@
 #include <random>
 #include <string>
 
-#include "io/estimation_setup.h"
-#include "model/integrator.h"
-#include "ros/estimator_pdf.h"
-#include "ros/estimator_run.h"
-#include "ros/estimator_timeline.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/ros/estimator_pdf.h"
+#include "pc_ekf/ros/estimator_run.h"
+#include "pc_ekf/ros/estimator_timeline.h"
 
 namespace {
 

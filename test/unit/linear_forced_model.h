@@ -4,7 +4,7 @@
 // textbook Kalman filter on the augmented state [y; theta].
 #pragma once
 
-#include "model/mechanical_model.h"
+#include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf::testing {
 

@@ -11,9 +11,9 @@
 #include <limits>
 
 #include "bag_test_support.h"
-#include "io/bag_io.h"
-#include "io/estimation_setup.h"
-#include "io/measurement_csv.h"
+#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/measurement_csv.h"
 
 namespace pc_ekf {
 namespace {

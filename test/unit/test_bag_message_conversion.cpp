@@ -5,8 +5,8 @@
 #include <cmath>
 #include <limits>
 
-#include "io/estimation_setup.h"
-#include "ros/message_conversion.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
 namespace {

@@ -5,9 +5,9 @@
 
 #include <sstream>
 
-#include "io/estimation_setup.h"
-#include "io/measurement_csv.h"
-#include "io/offline_estimation.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {

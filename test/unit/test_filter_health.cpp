@@ -6,9 +6,9 @@
 #include <memory>
 #include <random>
 
-#include "filter/health.h"
-#include "filter/one_step_filter.h"
-#include "model/scalar_growth_model.h"
+#include "pc_ekf/filter/health.h"
+#include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/model/scalar_growth_model.h"
 
 namespace pc_ekf {
 namespace {

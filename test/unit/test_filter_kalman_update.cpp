@@ -3,7 +3,7 @@
 
 #include <random>
 
-#include "filter/kalman_update.h"
+#include "pc_ekf/filter/kalman_update.h"
 
 namespace pc_ekf {
 namespace {

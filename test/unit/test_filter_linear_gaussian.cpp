@@ -8,10 +8,10 @@
 #include <random>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "filter/batch_update.h"
-#include "filter/one_step_filter.h"
+#include "pc_ekf/filter/batch_update.h"
+#include "pc_ekf/filter/one_step_filter.h"
 #include "linear_forced_model.h"
-#include "pc/pc_statistics.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 namespace {

@@ -4,10 +4,10 @@
 // parameters uncertain must recover them.
 #include <gtest/gtest.h>
 
-#include "filter/predictive_check.h"
-#include "filter/trajectory_simulation.h"
-#include "io/estimation_setup.h"
-#include "io/offline_estimation.h"
+#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {

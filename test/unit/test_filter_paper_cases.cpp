@@ -2,9 +2,9 @@
 // (SPEC §3.5) and over many noise seeds. Seeds are fixed, not selected.
 #include <gtest/gtest.h>
 
-#include "filter/reference_posterior.h"
-#include "io/estimation_setup.h"
-#include "io/offline_estimation.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {

@@ -2,9 +2,9 @@
 // drift (variance growth), re-opening, and their configuration keys.
 #include <gtest/gtest.h>
 
-#include "filter/measurement.h"
-#include "filter/update_safeguards.h"
-#include "io/estimator_config.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/update_safeguards.h"
+#include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {
 namespace {

@@ -13,7 +13,7 @@
 #include <sstream>
 #include <string>
 
-#include "io/checkpoint.h"
+#include "pc_ekf/io/checkpoint.h"
 
 namespace pc_ekf {
 namespace {

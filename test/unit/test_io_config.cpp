@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "io/estimator_config.h"
+#include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {
 namespace {

@@ -8,9 +8,9 @@
 #include <random>
 #include <string>
 
-#include "filter/trajectory_simulation.h"
-#include "io/estimation_setup.h"
-#include "io/offline_estimation.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {

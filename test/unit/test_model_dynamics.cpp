@@ -10,8 +10,8 @@
 #include <memory>
 #include <random>
 
-#include "model/integrator.h"
-#include "model/roll_plane_model.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {

@@ -5,7 +5,7 @@
 #include <limits>
 #include <memory>
 
-#include "model/roll_plane_model.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {

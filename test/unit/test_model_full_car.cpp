@@ -10,9 +10,9 @@
 #include <memory>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "model/full_car_model.h"
-#include "model/full_car_road.h"
-#include "model/integrator.h"
+#include "pc_ekf/model/full_car_model.h"
+#include "pc_ekf/model/full_car_road.h"
+#include "pc_ekf/model/integrator.h"
 
 namespace pc_ekf {
 namespace {

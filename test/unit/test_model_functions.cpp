@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "model/smooth_functions.h"
+#include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
 namespace {

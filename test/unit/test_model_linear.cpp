@@ -6,8 +6,8 @@
 #include <memory>
 #include <unsupported/Eigen/MatrixFunctions>
 
-#include "model/integrator.h"
-#include "model/roll_plane_model.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {

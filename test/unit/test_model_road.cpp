@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "model/road_input.h"
+#include "pc_ekf/model/road_input.h"
 
 namespace pc_ekf {
 namespace {

@@ -3,8 +3,8 @@
 
 #include <cmath>
 
-#include "model/integrator.h"
-#include "model/scalar_growth_model.h"
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/scalar_growth_model.h"
 
 namespace pc_ekf {
 namespace {

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "pc/polynomial_basis.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 namespace {

@@ -6,9 +6,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "pc/collocation_design.h"
-#include "pc/pc_statistics.h"
-#include "pc/point_sets.h"
+#include "pc_ekf/pc/collocation_design.h"
+#include "pc_ekf/pc/pc_statistics.h"
+#include "pc_ekf/pc/point_sets.h"
 
 namespace pc_ekf {
 namespace {

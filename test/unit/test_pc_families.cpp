@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "pc/orthonormal_family.h"
-#include "pc/special_functions.h"
+#include "pc_ekf/pc/orthonormal_family.h"
+#include "pc_ekf/pc/special_functions.h"
 
 namespace pc_ekf {
 namespace {

@@ -4,8 +4,8 @@
 #include <stdexcept>
 #include <vector>
 
-#include "pc/orthonormal_family.h"
-#include "pc/point_sets.h"
+#include "pc_ekf/pc/orthonormal_family.h"
+#include "pc_ekf/pc/point_sets.h"
 
 namespace pc_ekf {
 namespace {

@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "pc/pc_statistics.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 namespace {

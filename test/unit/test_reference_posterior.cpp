@@ -8,10 +8,10 @@
 #include <memory>
 #include <random>
 
-#include "filter/posterior_prior.h"
-#include "filter/reference_posterior.h"
-#include "filter/trajectory_simulation.h"
-#include "model/roll_plane_model.h"
+#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {
