@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # THE test command: installs what is missing, builds, runs every gtest and
-# rostest, checks that the install list covers every package used
+# rostest, checks the install space (an outside package builds against it),
+# catkin_lint (no errors) and that the install list covers every package used
 # (lib/check_install_list.py), and ends with "N passed, N failed" (N = test cases).
 #   --colcon     also check that `colcon build` succeeds (separate workspace)
 #   --sanitize   instead: build .build/catkin_ws_sanitize with ASan + UBSan
@@ -14,7 +15,7 @@ here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
 source "$here/lib/fuzz.sh"
 source "$here/lib/sanitize.sh"
-source "$here/lib/install_check.sh"
+source "$here/lib/package_checks.sh"
 
 check_colcon=0
 sanitize=0
@@ -24,7 +25,7 @@ for arg in "$@"; do
     --colcon) check_colcon=1 ;;
     --sanitize) sanitize=1; fuzz=0 ;;
     --no-fuzz) fuzz=0 ;;
-    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
     *) echo "test.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
@@ -66,6 +67,7 @@ fi
 
 # The install space: headers, libraries and tools usable by another package.
 [ "$sanitize" -eq 0 ] && pc_ekf_install_check "$results"
+[ "$sanitize" -eq 0 ] && pc_ekf_lint_check "$results"
 
 # The install list covers every package used (a fresh machine has only it).
 mkdir -p "$results"

@@ -35,3 +35,25 @@ ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
 PY
   [ "$status" = ok ] || pc_ekf_log "install space check FAILED: $why (log: .build/install_check.log)"
 }
+
+# test.sh's catkin_lint case: no errors in pc_ekf or the example package
+# (warnings are listed in the log). Writes RESULTS_DIR/catkin_lint.xml.
+pc_ekf_lint_check() {
+  local results=$1 log=$PC_EKF_ROOT/.build/catkin_lint.log status=ok
+  (cd "$PC_EKF_WS/src" && catkin_lint -W1 .) >"$log" 2>&1 || status=FAILED
+  grep -q ": error: " "$log" && status=FAILED
+  mkdir -p "$results"
+  /usr/bin/python3 - "$results/catkin_lint.xml" "$status" "$log" <<'PY'
+import sys, xml.etree.ElementTree as ET
+out, status, log = sys.argv[1:]
+text = open(log).read()
+suite = ET.Element("testsuite", name="catkin_lint", tests="1", failures="0" if status == "ok" else "1")
+case = ET.SubElement(suite, "testcase", classname="catkin_lint", name="errors")
+ET.SubElement(case, "system-out").text = text
+if status != "ok":
+    errors = [l for l in text.splitlines() if ": error: " in l]
+    ET.SubElement(case, "failure", message="%d catkin_lint errors" % len(errors)).text = "\n".join(errors) or text[-2000:]
+ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
+PY
+  [ "$status" = ok ] || pc_ekf_log "catkin_lint FAILED (log: .build/catkin_lint.log)"
+}
