@@ -15,7 +15,7 @@
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/io/checkpoint.h"
 #include "pc_ekf/io/estimator_config.h"
-#include "pc_ekf/ros/estimator_pdf.h"
+#include "pc_ekf/pc/pdf_sampler.h"
 
 namespace pc_ekf {
 

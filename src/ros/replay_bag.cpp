@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
-#include "pc_ekf/io/bag_check.h"
+#include "pc_ekf/ros/bag_check.h"
 
 namespace pc_ekf {
 

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "pc_ekf/io/bag_io.h"  // BagError
+#include "pc_ekf/ros/bag_io.h"  // BagError
 
 namespace pc_ekf {
 

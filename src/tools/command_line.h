@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/measurement_csv.h"
 

@@ -8,7 +8,7 @@
 #include <string>
 
 #include "pc_ekf/filter/uncertain_parameters.h"
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/ros/model_plugins.h"
 #include "pc_ekf/io/measurement_csv.h"

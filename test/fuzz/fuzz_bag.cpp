@@ -1,4 +1,4 @@
-// Fuzz target: bag reading (pc_ekf::readBag, src/io/bag_io.h) -- the path of
+// Fuzz target: bag reading (pc_ekf::readBag, src/ros/bag_io.h) -- the path of
 // `estimate_offline --bag` and of replay_node's bag loading -- on the fuzz
 // bytes written to a temporary file.
 // Contract (bag_io.h): a missing, unreadable, truncated or corrupt bag throws
@@ -16,7 +16,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 
 namespace {
 

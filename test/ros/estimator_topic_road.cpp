@@ -5,7 +5,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "estimator_test_support.h"
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 
 namespace pc_ekf::test {
 namespace {

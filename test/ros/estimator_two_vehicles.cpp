@@ -2,7 +2,7 @@
 // at the same time: each publishes its own estimates, equal to
 // estimate_offline on its own data.
 #include "estimator_test_support.h"
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 
 namespace pc_ekf::test {
 namespace {

@@ -17,7 +17,7 @@
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/model/integrator.h"
-#include "pc_ekf/ros/estimator_pdf.h"
+#include "pc_ekf/pc/pdf_sampler.h"
 #include "pc_ekf/ros/estimator_run.h"
 #include "pc_ekf/ros/estimator_timeline.h"
 

@@ -11,7 +11,7 @@
 #include <limits>
 
 #include "bag_test_support.h"
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
 

@@ -1,4 +1,4 @@
-#include "pc_ekf/ros/estimator_pdf.h"
+#include "pc_ekf/pc/pdf_sampler.h"
 
 #include <algorithm>
 #include <stdexcept>

@@ -1,4 +1,4 @@
-#include "pc_ekf/io/bag_check.h"
+#include "pc_ekf/ros/bag_check.h"
 
 #include <rosbag/chunked_file.h>
 

@@ -1,4 +1,4 @@
-#include "pc_ekf/io/bag_io.h"
+#include "pc_ekf/ros/bag_io.h"
 
 #include <ros/message_traits.h>
 #include <ros/serialization.h>
@@ -16,7 +16,7 @@
 #include <set>
 #include <sstream>
 
-#include "pc_ekf/io/bag_check.h"
+#include "pc_ekf/ros/bag_check.h"
 
 namespace pc_ekf {
 
