@@ -304,8 +304,9 @@ void writeCheckpoint(const Checkpoint& c, const std::string& path) {
   out << "road.samples = " << c.road.t.size() << "\n";
   out << "road.last_stamp = " << stampText(c.road_last_stamp) << "\n";
   for (std::size_t i = 0; i < c.road.t.size(); ++i) {
-    out << "road." << i << " = " << number(c.road.t[i]) << " " << number(c.road.left[i]) << " "
-        << number(c.road.right[i]) << "\n";
+    out << "road." << i << " = " << number(c.road.t[i]);
+    for (const auto& column : c.road.heights) out << " " << number(column[i]);
+    out << "\n";
   }
   for (const auto& [name, value] : c.counters) {
     out << kCounterPrefix << name << " = " << value << "\n";
@@ -394,12 +395,14 @@ Checkpoint readCheckpoint(const std::string& path) {
   for (int i = 0; i < road; ++i) {
     const std::string key = "road." + std::to_string(i);
     const auto t = f.tokens(key);
-    f.count(key, t, 3);
+    // t and one height per contact: as many as the first road sample has.
+    if (i == 0 && t.size() < 2) f.count(key, t, 3);
+    if (i == 0) c.road.heights.resize(t.size() - 1);
+    f.count(key, t, c.road.heights.size() + 1);
     const double time = f.real(key, t[0]);
     if (i > 0 && !(time > c.road.t.back())) f.fail(key, "time not after the previous road sample");
     c.road.t.push_back(time);
-    c.road.left.push_back(f.real(key, t[1]));
-    c.road.right.push_back(f.real(key, t[2]));
+    for (std::size_t k = 0; k < c.road.heights.size(); ++k) c.road.heights[k].push_back(f.real(key, t[k + 1]));
   }
   if (road > 0 && c.road_mode != "topic") f.fail("road.samples", "road samples with road_mode analytic");
   c.counters = f.counters();

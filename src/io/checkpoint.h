@@ -54,7 +54,7 @@ struct Checkpoint {
   // Road from road/profile (road_mode topic) that the filters still need: the
   // buffer from the sample at or before their oldest time (s since origin);
   // empty otherwise. road_last_stamp: the last road message accepted.
-  RoadSeries road;
+  ContactSeries road;  // one height column per contact of the model
   CheckpointStamp road_last_stamp;
   std::map<std::string, std::uint64_t> counters;  // node counters by name ([a-z0-9_.])
 };

@@ -82,11 +82,6 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
         config_.pdf.bins, config_.pdf.seed);
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
-  if (!checkpoint_file_.empty() && !config_.model_type->twoContacts()) {
-    throw ConfigError(pnh_.resolveName("checkpoint_file") + ": checkpoints keep a two-contact "
-                      "road; model " + config_.model_type->name() + " has " +
-                      std::to_string(config_.model_type->contactNames().size()) + " contacts");
-  }
   // Before any subscription: no callback may see the prior state.
   if (!checkpoint_file_.empty()) resumeFromCheckpoint();
 
@@ -158,7 +153,11 @@ void EstimatorRos::resumeFromCheckpoint() {
   }
   std::optional<ros::Time> last_road;
   if (!c.road.t.empty()) last_road = rosTime(c.road_last_stamp);
-  timeline_.resume(mode, rosTime(c.origin), rosTime(c.last_sample), c.road, last_road);
+  try {
+    timeline_.resume(mode, rosTime(c.origin), rosTime(c.last_sample), c.road, last_road);
+  } catch (const std::invalid_argument& e) {
+    throw CheckpointError("checkpoint " + checkpoint_file_ + ": key 'road.samples': " + e.what());
+  }
   run_ = std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_);
   run_->resumeFrom(c, checkpoint_file_);
   diagnostics_.counters() = countersFromMap(c.counters, checkpoint_file_);

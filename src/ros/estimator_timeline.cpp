@@ -59,7 +59,7 @@ void EstimatorTimeline::reset() {
 }
 
 void EstimatorTimeline::resume(RoadMode mode, const ros::Time& origin,
-                               const ros::Time& last_sample, const RoadSeries& road,
+                               const ros::Time& last_sample, const ContactSeries& road,
                                const std::optional<ros::Time>& last_road) {
   reset();
   mode_ = mode;
@@ -67,16 +67,28 @@ void EstimatorTimeline::resume(RoadMode mode, const ros::Time& origin,
   last_sample_ = last_sample;
   road_history_complete_ = mode != RoadMode::kTopic;
   if (mode != RoadMode::kTopic) return;
-  road_ = std::make_shared<SampledRoad>(road.t, road.left, road.right);
+  if (road.t.empty()) {
+    last_road_ = last_road;
+    return;
+  }
+  if (static_cast<int>(road.heights.size()) != settings_.contacts) {
+    throw std::invalid_argument("the checkpoint's road has " + std::to_string(road.heights.size()) +
+                                " height columns, the model " + std::to_string(settings_.contacts) +
+                                " contacts");
+  }
+  road_ = std::make_shared<SampledRoad>(road.t, road.heights);
   last_road_ = last_road;
 }
 
-RoadSeries EstimatorTimeline::roadFrom(double t) const {
+ContactSeries EstimatorTimeline::roadFrom(double t) const {
   const auto i = static_cast<std::ptrdiff_t>(road_->indexNeededFor(t));
   const auto tail = [i](const std::vector<double>& v) {
     return std::vector<double>(v.begin() + i, v.end());
   };
-  return {tail(road_->times()), tail(road_->leftHeights()), tail(road_->rightHeights())};
+  ContactSeries out;
+  out.t = tail(road_->times());
+  for (int c = 0; c < road_->contactCount(); ++c) out.heights.push_back(tail(road_->column(c)));
+  return out;
 }
 
 StampVerdict EstimatorTimeline::order(const std::optional<ros::Time>& last,

@@ -78,7 +78,7 @@ class EstimatorTimeline {
   // need, roadFrom() when saved) and road messages up to `last_road` count as
   // already seen; the road history counts as incomplete (no ~estimate_batch).
   void resume(RoadMode mode, const ros::Time& origin, const ros::Time& last_sample,
-              const RoadSeries& road = {}, const std::optional<ros::Time>& last_road = {});
+              const ContactSeries& road = {}, const std::optional<ros::Time>& last_road = {});
 
   // `arrival`: wall-clock seconds, for the road wait of pending samples.
   StampVerdict addRoad(const ros::Time& stamp, double left, double right, double arrival);
@@ -107,7 +107,7 @@ class EstimatorTimeline {
   std::size_t pendingCount() const { return pending_.size(); }
   std::size_t roadCount() const { return road_->size(); }
   // The road buffer from the sample at or before t (s since the origin) on.
-  RoadSeries roadFrom(double t) const;
+  ContactSeries roadFrom(double t) const;
   std::optional<ros::Time> lastRoadStamp() const { return last_road_; }
 
  private:

@@ -66,8 +66,7 @@ Checkpoint sampleCheckpoint() {
   c.batch_samples = {a, b};
   c.batch_last_stamp = {1000, 60000000};
   c.road.t = {0.9, 0.9 + 1.0 / 3.0, 1.3};
-  c.road.left = {0.0, 1e-300, -0.1 / 3.0};
-  c.road.right = {0.05, -0.0, 2.0 / 7.0};
+  c.road.heights = {{0.0, 1e-300, -0.1 / 3.0}, {0.05, -0.0, 2.0 / 7.0}};
   c.road_last_stamp = {1001, 270000000};
   c.counters = {{"samples_received", 40}, {"samples_rejected.duplicate_stamp", 2}};
   return c;
@@ -116,8 +115,8 @@ TEST(Checkpoint, RoundTripIsBitExact) {
   ASSERT_EQ(r.road.t.size(), 3u);
   for (std::size_t i = 0; i < 3; ++i) {
     EXPECT_TRUE(sameBits(r.road.t[i], c.road.t[i])) << i;
-    EXPECT_TRUE(sameBits(r.road.left[i], c.road.left[i])) << i;
-    EXPECT_TRUE(sameBits(r.road.right[i], c.road.right[i])) << i;
+    EXPECT_TRUE(sameBits(r.road.heights[0][i], c.road.heights[0][i])) << i;
+    EXPECT_TRUE(sameBits(r.road.heights[1][i], c.road.heights[1][i])) << i;
   }
   EXPECT_EQ(r.road_last_stamp.sec, 1001u);
   EXPECT_EQ(r.road_last_stamp.nsec, 270000000u);
@@ -129,7 +128,7 @@ TEST(Checkpoint, RoundTripIsBitExact) {
   next.coherence_disagreement.reset();
   next.batch_samples.clear();
   next.road_mode = "analytic";
-  next.road = RoadSeries{};
+  next.road = ContactSeries{};
   writeCheckpoint(next, path);
   const Checkpoint r2 = readCheckpoint(path);
   EXPECT_EQ(r2.full.samples, 43);
@@ -245,6 +244,23 @@ TEST(Checkpoint, UnwritableDirectoryIsReportedAndLeavesNoTemporary) {
   EXPECT_EQ(readCheckpoint(good).full.samples, 36);
   std::filesystem::remove(good + ".tmp");
   std::filesystem::remove(good);
+}
+
+TEST(Checkpoint, RoadUnderFourContactsRoundTripsAndKeepsItsWidth) {
+  Checkpoint c = sampleCheckpoint();
+  c.road.heights = {{0.0, 0.1, 0.2}, {1.0 / 3.0, -0.0, 5e-324}, {0.0, 0.0, 0.08}, {1e300, 2.0, 3.0}};
+  const std::string path = tempPath("four_contacts.ckpt");
+  writeCheckpoint(c, path);
+  const Checkpoint r = readCheckpoint(path);
+  ASSERT_EQ(r.road.heights.size(), 4u);
+  for (std::size_t k = 0; k < 4; ++k) {
+    for (std::size_t i = 0; i < 3; ++i) EXPECT_TRUE(sameBits(r.road.heights[k][i], c.road.heights[k][i]));
+  }
+  // A row with a height missing is refused naming it.
+  writeText(path, editLine(readText(path), "road.2", "road.2 = 1.3 0 0 0"));
+  EXPECT_NE(errorOf(path).find("key 'road.2': expected 5 values, got 4"), std::string::npos)
+      << errorOf(path);
+  std::filesystem::remove(path);
 }
 
 }  // namespace
