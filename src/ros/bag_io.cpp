@@ -39,10 +39,13 @@ std::string join(const std::vector<std::string>& items) {
 }
 
 // The one topic of the bag that matches `suffix` with type T, or "" when
-// none matches. Throws BagError when several match or the type differs.
+// none matches. Throws BagError when several match or the type differs; a
+// topic recorded with another definition of T is an error too, unless
+// `other_definition` is given: then it is skipped and named there.
 template <typename T>
 std::string findTopic(const std::string& path, rosbag::Bag& bag, const std::string& suffix,
-                      std::vector<std::string>* all_topics) {
+                      std::vector<std::string>* all_topics,
+                      std::string* other_definition = nullptr) {
   rosbag::View everything(bag);
   std::set<std::string> matches;
   all_topics->clear();
@@ -55,6 +58,10 @@ std::string findTopic(const std::string& path, rosbag::Bag& bag, const std::stri
                      expected);
     }
     if (c->md5sum != "*" && c->md5sum != ros::message_traits::MD5Sum<T>::value()) {
+      if (other_definition) {
+        *other_definition = c->topic;
+        continue;
+      }
       throw BagError(path + ": topic '" + c->topic +
                      "' was recorded with a different definition of " + expected + " (md5 " +
                      c->md5sum + ")");
@@ -239,8 +246,15 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
                             : findTopic<RoadHeights>(path, bag, options.road_heights_topic, &topics);
     record.joint_states_topic =
         findTopic<sensor_msgs::JointState>(path, bag, options.joint_states_topic, &topics);
+    // Ground truth is optional: one recorded with an older ParameterEstimate
+    // (fewer fields) is left out, not fatal.
+    std::string older_truth;
     const std::string truth_topic =
-        findTopic<ParameterEstimate>(path, bag, options.ground_truth_topic, &topics);
+        findTopic<ParameterEstimate>(path, bag, options.ground_truth_topic, &topics, &older_truth);
+    if (!older_truth.empty()) {
+      record.warnings.push_back("topic '" + older_truth + "' has another definition of "
+                                "pc_ekf/ParameterEstimate (an older bag): ground truth not read");
+    }
     if (record.road_topic.empty()) {
       throw BagError(path + ": no " +
                      (options.contacts.empty() ? "pc_ekf/RoadProfile" : "pc_ekf/RoadHeights") +
