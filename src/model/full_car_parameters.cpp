@@ -3,6 +3,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "pc_ekf/model/domain_message.h"
 #include "pc_ekf/model/full_car_model.h"
 
 namespace pc_ekf {
@@ -11,16 +12,6 @@ namespace {
 
 constexpr int kCount = 19;
 
-std::string num(double value) {
-  std::ostringstream os;
-  os.precision(10);
-  os << value;
-  return os.str();
-}
-
-std::string outOfDomain(const std::string& name, double value, const std::string& why) {
-  return name + " = " + num(value) + " " + why;
-}
 
 }  // namespace
 
@@ -91,10 +82,10 @@ std::string fullCarParameterRuleViolation(const Eigen::Ref<const Eigen::VectorXd
   }
   const double wheelbase = params[3] + params[4], track = params[5];
   if (params[17] < 0.0 || params[17] > wheelbase) {
-    return outOfDomain(names[17], params[17], "outside [0, " + num(wheelbase) + "]");
+    return outOfDomain(names[17], params[17], "outside [0, " + domainNumber(wheelbase) + "]");
   }
   if (params[18] < 0.0 || params[18] > track) {
-    return outOfDomain(names[18], params[18], "outside [0, " + num(track) + "]");
+    return outOfDomain(names[18], params[18], "outside [0, " + domainNumber(track) + "]");
   }
   return "";
 }

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "pc_ekf/model/domain_message.h"
 #include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
@@ -262,16 +263,6 @@ class RollPlaneBatch : public ModelBatch {
   std::shared_ptr<const ContactRoad> road_;
 };
 
-std::string num(double value) {
-  std::ostringstream os;
-  os.precision(10);
-  os << value;
-  return os.str();
-}
-
-std::string outOfDomain(const std::string& name, double value, const std::string& why) {
-  return name + " = " + num(value) + " " + why;
-}
 
 }  // namespace
 
@@ -358,10 +349,10 @@ std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd
   }
   const double m = params[0], length = params[9], mass = params[14], pos = params[15];
   if (mass + m <= 0.0) {
-    return outOfDomain(names[14], mass, "makes the total mass <= 0 (bar_mass = " + num(m) + ")");
+    return outOfDomain(names[14], mass, "makes the total mass <= 0 (bar_mass = " + domainNumber(m) + ")");
   }
   if (pos < 0.0 || pos > length) {
-    return outOfDomain(names[15], pos, "outside [0, " + num(length) + "]");
+    return outOfDomain(names[15], pos, "outside [0, " + domainNumber(length) + "]");
   }
   // A negative added mass can still make the combined inertia non-positive.
   const double cg = (mass * pos + m * 0.5 * length) / (mass + m);
