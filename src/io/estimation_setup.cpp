@@ -21,10 +21,6 @@ std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
     case RoadSource::kSine: needTwo("sine"); return std::make_shared<SineRoad>(c.road.sine);
     case RoadSource::kSeries: {
       try {
-        if (type.twoContacts()) {
-          const RoadSeries r = readRoadCsvFile(c.road.series_file);
-          return std::make_shared<SampledRoad>(r.t, r.left, r.right);
-        }
         const ContactSeries r = readContactRoadCsvFile(c.road.series_file, type.roadColumns());
         return std::make_shared<SampledRoad>(r.t, r.heights);
       } catch (const CsvError& e) {

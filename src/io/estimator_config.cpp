@@ -254,7 +254,6 @@ void readNode(YamlMapReader r, NodeConfig& n, const ModelType& type) {
   n.joint_names.clear();
   for (const auto& s : suspensions) {
     std::string name = s.default_joint;
-    if (type.name() == "roll_plane") name = s.config_key == "left" ? n.left_joint : n.right_joint;
     j.text(s.config_key, name);
     if (name.empty()) j.fail(s.config_key, "(empty)", "a joint name");
     for (std::size_t k = 0; k < n.joint_names.size(); ++k) {
@@ -264,10 +263,6 @@ void readNode(YamlMapReader r, NodeConfig& n, const ModelType& type) {
       }
     }
     n.joint_names.push_back(name);
-  }
-  if (type.name() == "roll_plane") {
-    n.left_joint = n.joint_names[0];
-    n.right_joint = n.joint_names[1];
   }
   j.finish();
   n.reset_on_time_jump = readFlag(r, "reset_on_time_jump", n.reset_on_time_jump);

@@ -136,10 +136,8 @@ enum class BatchMethod { kEsMda, kWholeSet };
 std::string toString(BatchMethod m);
 
 struct NodeConfig {
-  std::string left_joint = "left_suspension";    // JointState name of tyre 1 (u1, v1)
-  std::string right_joint = "right_suspension";  // tyre 2 (u2, v2)
   // Any model: one JointState name per suspension (ModelType::suspensions()
-  // order; node.joints.<config_key>). Roll plane: {left_joint, right_joint}.
+  // order; node.joints.<config_key>). Roll plane: left (u1, v1), right (u2, v2).
   std::vector<std::string> joint_names{"left_suspension", "right_suspension"};
   bool reset_on_time_jump = false;               // else a sample stamped back in time is dropped
   double time_jump_tolerance = 0.5;              // s: a step back beyond this is a time jump

@@ -169,9 +169,5 @@ ContactSeries readContactRoadCsvFile(const std::string& path,
   return road;
 }
 
-RoadSeries readRoadCsvFile(const std::string& path) {
-  std::ifstream in = openOrThrow(path);
-  return readRoadCsv(in, path);
-}
 
 }  // namespace pc_ekf

@@ -40,6 +40,5 @@ struct RoadSeries {
   std::vector<double> t, left, right;
 };
 RoadSeries readRoadCsv(std::istream& in, const std::string& source);
-RoadSeries readRoadCsvFile(const std::string& path);
 
 }  // namespace pc_ekf

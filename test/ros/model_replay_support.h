@@ -14,7 +14,6 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <sstream>
 
 #include "replay_test_support.h"
 
@@ -35,30 +34,6 @@ struct ModelReplay {
     return false;
   }
 };
-
-// estimate_offline's samples.csv: the header's names and the rows (non-numbers as NaN).
-inline std::vector<std::vector<double>> readCsvRows(const std::string& path,
-                                                    std::vector<std::string>* header) {
-  std::istringstream text(readText(path));
-  std::string line;
-  std::getline(text, line);
-  std::istringstream h(line);
-  for (std::string name; std::getline(h, name, ',');) header->push_back(name);
-  std::vector<std::vector<double>> rows;
-  while (std::getline(text, line)) {
-    std::vector<double> row;
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) {
-      try {
-        row.push_back(std::stod(cell));
-      } catch (const std::exception&) {
-        row.push_back(std::nan(""));
-      }
-    }
-    rows.push_back(row);
-  }
-  return rows;
-}
 
 // Fills `out`; fails the test (ASSERT) on any step or mismatch. `joints` is
 // the diagnostics value the node should report once it ran.

@@ -40,24 +40,10 @@ struct OfflineSamples {
 };
 
 OfflineSamples readSamplesCsv(const std::string& path) {
-  std::istringstream text(readText(path));
   OfflineSamples out;
-  std::string line;
-  std::getline(text, line);
-  std::istringstream header(line);
-  for (std::string name; std::getline(header, name, ',');) out.column[name] = out.column.size();
-  while (std::getline(text, line)) {
-    std::vector<double> row;
-    std::istringstream cells(line);
-    for (std::string cell; std::getline(cells, cell, ',');) {
-      try {
-        row.push_back(std::stod(cell));
-      } catch (const std::exception&) {
-        row.push_back(std::nan(""));  // health text and the like
-      }
-    }
-    out.rows.push_back(row);
-  }
+  std::vector<std::string> header;
+  out.rows = readCsvRows(path, &header);  // health text and the like read as NaN
+  for (const auto& name : header) out.column[name] = out.column.size();
   return out;
 }
 

@@ -12,6 +12,8 @@
 #include <chrono>
 #include <filesystem>
 #include <functional>
+#include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -103,6 +105,30 @@ inline bool spinUntil(double seconds, const std::function<void()>& poll,
     std::this_thread::sleep_for(std::chrono::milliseconds(2));
   }
   return true;
+}
+
+// estimate_offline's samples.csv: the header's names and the rows (non-numbers as NaN).
+inline std::vector<std::vector<double>> readCsvRows(const std::string& path,
+                                                    std::vector<std::string>* header) {
+  std::istringstream text(readText(path));
+  std::string line;
+  std::getline(text, line);
+  std::istringstream h(line);
+  for (std::string name; std::getline(h, name, ',');) header->push_back(name);
+  std::vector<std::vector<double>> rows;
+  while (std::getline(text, line)) {
+    std::vector<double> row;
+    std::istringstream cells(line);
+    for (std::string cell; std::getline(cells, cell, ',');) {
+      try {
+        row.push_back(std::stod(cell));
+      } catch (const std::exception&) {
+        row.push_back(std::nan(""));
+      }
+    }
+    rows.push_back(row);
+  }
+  return rows;
 }
 
 }  // namespace pc_ekf::test
