@@ -114,9 +114,8 @@ StepResult OneStepFilter::process(const Measurement& m) {
   r.rejected = rejected_;
   violations_ = r.health.nis_window_outside ? violations_ + 1 : 0;
   if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
-    Eigen::MatrixXd theta = x_.bottomRows(np);
-    reopenParameters(theta, propagator_->priorState().bottomRows(np), settings_.reopen);
-    x_.bottomRows(np) = theta;
+    reopenExtendedState(x_, static_cast<int>(x_.rows()) - np,
+                        propagator_->priorState().bottomRows(np), settings_.reopen);
     health_.reset();
     violations_ = 0;
     r.reopened = true;

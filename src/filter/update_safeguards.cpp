@@ -85,4 +85,52 @@ void reopenParameters(Eigen::MatrixXd& theta, const Eigen::MatrixXd& prior,
   }
 }
 
+namespace {
+
+// The residual `r` (rows of coefficients) moved into the complement of the
+// rows of `t`, its Gram matrix r r^T unchanged: r = V S U^T becomes V S U'^T
+// with U' the orthonormal basis of that complement nearest to U (polar factor
+// of the projected U). Where the complement has no room left (more states
+// than free coefficients), the projection itself, which only shrinks r.
+Eigen::MatrixXd residualOrthogonalTo(const Eigen::MatrixXd& r, const Eigen::MatrixXd& t) {
+  const Eigen::JacobiSVD<Eigen::MatrixXd> rs(r.transpose(), Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const Eigen::VectorXd sv = rs.singularValues();
+  Eigen::Index rank = 0;
+  while (rank < sv.size() && sv(rank) > 1e-14 * sv(0)) ++rank;
+  if (rank == 0) return Eigen::MatrixXd::Zero(r.rows(), r.cols());
+  const Eigen::MatrixXd off_t =
+      Eigen::MatrixXd::Identity(t.cols(), t.cols()) -
+      t.transpose() * (t * t.transpose()).completeOrthogonalDecomposition().solve(t);
+  const Eigen::MatrixXd u = off_t * rs.matrixU().leftCols(rank);
+  const Eigen::JacobiSVD<Eigen::MatrixXd> us(u, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  if (us.singularValues()(rank - 1) < 1e-12) return (off_t * r.transpose()).transpose();
+  const Eigen::MatrixXd u_new = us.matrixU() * us.matrixV().transpose();
+  return rs.matrixV().leftCols(rank) * sv.head(rank).asDiagonal() * u_new.transpose();
+}
+
+}  // namespace
+
+void reopenExtendedState(Eigen::MatrixXd& x, int first_parameter, const Eigen::MatrixXd& prior,
+                         const ReopenSettings& s) {
+  const Eigen::Index np = x.rows() - first_parameter, higher = x.cols() - 1;
+  Eigen::MatrixXd theta = x.bottomRows(np);
+  if (first_parameter == 0 || higher == 0 || s.mode == ReopenMode::kOff) {
+    reopenParameters(theta, prior, s);
+    x.bottomRows(np) = theta;
+    return;
+  }
+  const Eigen::MatrixXd t_old = theta.rightCols(higher);
+  const Eigen::MatrixXd y = x.topRows(first_parameter).rightCols(higher);
+  // B^T solves C_tt B^T = C_ty; a rank-deficient C_tt (a parameter without
+  // spread) gets the minimum-norm solution.
+  const Eigen::MatrixXd c_tt = t_old * t_old.transpose();
+  const Eigen::MatrixXd b =
+      c_tt.completeOrthogonalDecomposition().solve(t_old * y.transpose()).transpose();
+  reopenParameters(theta, prior, s);
+  x.bottomRows(np) = theta;
+  const Eigen::MatrixXd t_new = theta.rightCols(higher);
+  x.topRows(first_parameter).rightCols(higher) =
+      b * t_new + residualOrthogonalTo(y - b * t_old, t_new);
+}
+
 }  // namespace pc_ekf

@@ -50,4 +50,14 @@ void applyDrift(Eigen::MatrixXd& x, int first_parameter, const Eigen::VectorXd& 
 void reopenParameters(Eigen::MatrixXd& theta, const Eigen::MatrixXd& prior,
                       const ReopenSettings& settings);
 
+// Re-opens the parameter rows of the extended state `x` (parameters from row
+// `first_parameter`) as reopenParameters does, and carries the states along:
+// each state keeps its linear regression on the parameters (B = C_yt C_tt^-1
+// from the higher coefficients) and its residual, so the state widens with
+// the parameters it depends on. Re-opening the parameters alone would leave
+// the state certain at values fitted with the old parameters; without process
+// noise the data could then only correct the parameters, biasing them.
+void reopenExtendedState(Eigen::MatrixXd& x, int first_parameter, const Eigen::MatrixXd& prior,
+                         const ReopenSettings& settings);
+
 }  // namespace pc_ekf

@@ -92,6 +92,37 @@ TEST(Reopen, WidthAroundTheMeanOrBackToThePrior) {
   EXPECT_EQ(p, prior);
 }
 
+// The states keep what they know given the parameters: the regression on the
+// parameters and the residual covariance are those before the re-open, while
+// the parameter rows are exactly reopenParameters' result.
+TEST(Reopen, StatesKeepTheirRegressionOnTheParameters) {
+  Eigen::MatrixXd x(4, 6);
+  x << 0.10, 1e-3, -2e-4, 5e-5, 1e-5, 8e-4,     // state u
+       -0.20, 4e-4, 3e-4, -1e-5, 6e-6, -5e-4,   // state v
+       230.0, 0.10, 0.01, 0.002, 0.0, 0.0,      // M
+       0.69, 1e-4, 2e-4, 0.0, 3e-5, 0.0;        // d_CG
+  Eigen::MatrixXd prior = Eigen::MatrixXd::Zero(2, 6);
+  prior << 200.0, 40.0, 0.0, 0.0, 0.0, 0.0,
+           0.762, 0.0, 0.08, 0.0, 0.0, 0.0;
+  auto regression = [](const Eigen::MatrixXd& c) {  // B = C_yt C_tt^-1, residual covariance
+    const Eigen::MatrixXd b = c.block(0, 2, 2, 2) * c.block(2, 2, 2, 2).inverse();
+    return std::make_pair(b, Eigen::MatrixXd(c.block(0, 0, 2, 2) - b * c.block(2, 0, 2, 2)));
+  };
+  for (ReopenMode mode : {ReopenMode::kWidth, ReopenMode::kPrior}) {
+    Eigen::MatrixXd r = x;
+    reopenExtendedState(r, 2, prior, {mode, 0.5, 3});
+    Eigen::MatrixXd theta = x.bottomRows(2);
+    reopenParameters(theta, prior, {mode, 0.5, 3});
+    EXPECT_EQ(Eigen::MatrixXd(r.bottomRows(2)), theta);
+    EXPECT_EQ(Eigen::VectorXd(r.col(0).head(2)), Eigen::VectorXd(x.col(0).head(2)));
+    const auto before = regression(pcCovariance(x)), after = regression(pcCovariance(r));
+    EXPECT_LT((after.first - before.first).norm(), 1e-9 * before.first.norm());
+    EXPECT_LT((after.second - before.second).norm(), 1e-9 * before.second.norm());
+    // The state widened with the parameters (here by far more than it was).
+    EXPECT_GT(pcCovariance(r)(0, 0), 100.0 * pcCovariance(x)(0, 0));
+  }
+}
+
 const std::string kUncertain =
     "uncertain:\n"
     "  - {name: added_mass, nominal: 200.0, relative_range: 0.5, germ: {family: beta, alpha: 2, beta: 2}}\n"
