@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Performance benchmarks (issue 6): builds the package in Release, runs the
+# Performance benchmarks: builds the package in Release, runs the
 # Google Benchmark binaries (test/benchmarks/bench_*.cpp) and the end-to-end
 # node measurement, prints one table and writes DIR/bench.json (raw outputs
 # in DIR/raw/, node logs in DIR/node/).

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the paper's experiments (SPEC §4, cases A-I) over many seeds with
+# Reproduces the paper's experiments (docs/method.md §6, cases A-I) over many seeds with
 # every method, against the exact posterior, and writes DIR/summary.md,
 # DIR/summary.json and DIR/figures/*.png.
 #   reproduce.sh [--seeds N] [--out DIR] [--cases LIST] [--no-error-vs-n]

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Soak test (issue 7): 10^6 samples at 1 kHz through estimator_node's
+# Soak test: 10^6 samples at 1 kHz through estimator_node's
 # per-sample path (road buffer, pending samples, one-step + coherence
 # filters, batch buffer, PDFs; test/soak/soak_estimator.cpp), at full speed.
 # Fails when a sample is dropped or RSS grows by more than 20 MB after the
