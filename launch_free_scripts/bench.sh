@@ -10,6 +10,7 @@
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
+pc_ekf_require_sources bench.sh
 
 out="$PC_EKF_ROOT/results"
 quick=0

@@ -9,7 +9,7 @@ set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 
 seeds=30
-out="$PC_EKF_ROOT/results"
+out="$PC_EKF_RESULTS"
 datasets="bump10,bump100,sine10,sine100,linear10,linear100"
 error_vs_n=1
 while [ $# -gt 0 ]; do
