@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "replay_test_support.h"
+#include "rostest_main.h"
 
 namespace pc_ekf::test {
 namespace {
@@ -76,10 +77,8 @@ std::string plotScript() { return std::string(PC_EKF_SOURCE_DIR) + "/scripts/plo
 
 TEST(PlotEstimates, SavedFigureIsDrawnFromEveryEstimateOfTheRun) {
   ScratchDir scratch;
-  const std::string bag = scratch.file("speed_bump_n10.bag");
-  RunResult r = run(scratch, PC_EKF_EXE_SYNTHESIZE_BAG,
-                    "--config " + quote(config("speed_bump.yaml")) + " --output " + quote(bag));
-  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string bag = synthesizeBag(scratch, "speed_bump.yaml");
+  ASSERT_FALSE(bag.empty());
 
   std::mutex lock;
   std::vector<ParameterEstimate> received;
@@ -162,13 +161,5 @@ TEST(PlotEstimates, RefusesAFileThatIsNoPng) {
 }  // namespace pc_ekf::test
 
 int main(int argc, char** argv) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, "plot_estimates_tester");
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return result;
+  return pc_ekf::test::runRostests(argc, argv, "plot_estimates_tester");
 }
