@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Performance benchmarks (issue 6): builds the package in Release, runs the
+# Performance benchmarks: builds the package in Release, runs the
 # Google Benchmark binaries (test/benchmarks/bench_*.cpp) and the end-to-end
 # node measurement, prints one table and writes DIR/bench.json (raw outputs
 # in DIR/raw/, node logs in DIR/node/).
@@ -10,6 +10,7 @@
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
+pc_ekf_require_sources bench.sh
 
 out="$PC_EKF_ROOT/results"
 quick=0

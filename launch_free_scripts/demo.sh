@@ -45,13 +45,12 @@ trap 'exit 130' INT TERM  # through the EXIT trap
 
 # The estimate collector (lib/collect_estimates.py) is rospy and calls a std_srvs service.
 pc_ekf_ensure_packages
-pc_ekf_log "building (log: .build/build.log)"
-mkdir -p "$PC_EKF_ROOT/.build"
-pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
-  tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; exit 1; }
+pc_ekf_build || exit 1
 pc_ekf_source_workspace
-bin="$PC_EKF_WS/devel/lib/pc_ekf"
-out="$PC_EKF_ROOT/.build/demo"
+bin=$PC_EKF_EXE_DIR
+plotter=$PC_EKF_ROOT/scripts/plot_estimates
+[ "$PC_EKF_INSTALLED" = 1 ] && plotter=$bin/plot_estimates
+out="$PC_EKF_STATE/demo"
 rm -rf "$out" && mkdir -p "$out"
 
 pc_ekf_roscore_start "$out/roscore.log" || exit 1
@@ -90,18 +89,26 @@ demo_run() {
   pc_ekf_start_owned collector "$run/collector.log" /usr/bin/python3 \
     "$here/lib/collect_estimates.py" --expect "$n" --batch --ready "$run/ready" --timeout 120
   local collector=$PC_EKF_LAST_PID
+  # The figure of this run: every estimate, the batch result, PDFs, truth.
+  pc_ekf_start_owned plot_estimates "$run/plot_estimates.log" /usr/bin/python3 \
+    "$plotter" --save "$run/estimates.png" --samples "$n" --batch --ready "$run/plot_ready" \
+    --timeout 120
+  local plot=$PC_EKF_LAST_PID
   for _ in $(seq 1200); do
-    [ -e "$run/ready" ] && break
-    kill -0 "$collector" 2>/dev/null && kill -0 "$estimator" 2>/dev/null || break
+    [ -e "$run/ready" ] && [ -e "$run/plot_ready" ] && break
+    kill -0 "$collector" 2>/dev/null && kill -0 "$estimator" 2>/dev/null &&
+      kill -0 "$plot" 2>/dev/null || break
     sleep 0.1
   done
-  [ -e "$run/ready" ] ||
-    { demo_fail "estimator_node did not come up" "$run"/estimator_node.log "$run"/collector.log; return 1; }
+  [ -e "$run/ready" ] && [ -e "$run/plot_ready" ] ||
+    { demo_fail "estimator_node did not come up" "$run"/estimator_node.log "$run"/collector.log \
+        "$run"/plot_estimates.log; return 1; }
 
   pc_ekf_start_owned replay_node "$run/replay_node.log" "$bin/replay_node" "_bag:=$bag" \
     _rate:=0 _lossless:=true __name:=replay_node
   wait "$PC_EKF_LAST_PID" || { demo_fail "replay_node failed" "$run/replay_node.log"; return 1; }
   wait "$collector" || { demo_fail "collecting the estimates failed" "$run/collector.log"; return 1; }
+  wait "$plot" || { demo_fail "plot_estimates failed" "$run/plot_estimates.log"; return 1; }
   # The collector's JSON is the last line of its log (rospy may log before it).
   tail -n 1 "$run/collector.log" >"$run/node.json"
 
@@ -115,6 +122,7 @@ demo_run() {
   echo "== N = $n samples over 3 s, 1 % noise (bag: ${bag#"$PC_EKF_ROOT"/}) =="
   /usr/bin/python3 "$here/lib/demo_table.py" "$n" "$run/node.json" \
     "$run/offline_one_step" "$run/offline_es_mda.json" "$run/replay_node.log" || return 1
+  echo "figure: $run/estimates.png ($(grep -o "from [0-9]* estimates" "$run/plot_estimates.log"))"
   pc_ekf_stop_group "$estimator" estimator_node
 }
 
@@ -145,7 +153,7 @@ pc_ekf_start_owned replay_node "$out/live_replay_node.log" "$bin/replay_node" \
 echo
 echo "Live: replay_node loops ${stem}_n$last_n.bag in real time into estimator_node."
 echo "In another shell:"
-echo "  source ${PC_EKF_WS#"$PC_EKF_ROOT"/}/devel/setup.bash"
+echo "  source $PC_EKF_SETUP"
 echo "  export ROS_MASTER_URI=$ROS_MASTER_URI ROS_HOSTNAME=${ROS_HOSTNAME:-}"
 echo "  rostopic echo -n 1 /parameter_estimate; rostopic hz /parameter_estimate"
 echo "  rosnode info /estimator_node; rosservice call /estimator_node/estimate_batch"

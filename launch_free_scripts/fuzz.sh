@@ -18,6 +18,7 @@
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
+pc_ekf_require_sources fuzz.sh
 source "$here/lib/fuzz.sh"
 
 seconds=60

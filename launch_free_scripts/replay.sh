@@ -41,14 +41,12 @@ trap pc_ekf_stop_owned EXIT
 trap 'exit 130' INT TERM
 
 pc_ekf_ensure_packages
-if [ ! -x "$PC_EKF_WS/devel/lib/pc_ekf/estimator_node" ] || [ ! -x "$PC_EKF_WS/devel/lib/pc_ekf/replay_node" ]; then
-  pc_ekf_log "building (log: .build/build.log)"
-  pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
-    tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; exit 1; }
+if [ ! -x "$PC_EKF_EXE_DIR/estimator_node" ] || [ ! -x "$PC_EKF_EXE_DIR/replay_node" ]; then
+  pc_ekf_build || exit 1
 fi
 pc_ekf_source_workspace
-bin="$PC_EKF_WS/devel/lib/pc_ekf"
-out="$PC_EKF_ROOT/.build/replay_sh"
+bin=$PC_EKF_EXE_DIR
+out="$PC_EKF_STATE/replay_sh"
 rm -rf "$out" && mkdir -p "$out"
 
 # Samples in the bag: the collector waits for as many estimates.

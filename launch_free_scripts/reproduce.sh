@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the paper's experiments (SPEC §4, cases A-I) over many seeds with
+# Reproduces the paper's experiments (docs/method.md §6, cases A-I) over many seeds with
 # every method, against the exact posterior, and writes DIR/summary.md,
 # DIR/summary.json and DIR/figures/*.png.
 #   reproduce.sh [--seeds N] [--out DIR] [--cases LIST] [--no-error-vs-n]
@@ -9,7 +9,7 @@ set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 
 seeds=30
-out="$PC_EKF_ROOT/results"
+out="$PC_EKF_RESULTS"
 datasets="bump10,bump100,sine10,sine100,linear10,linear100"
 error_vs_n=1
 while [ $# -gt 0 ]; do

@@ -10,7 +10,7 @@ set -euo pipefail
 source "$(dirname "$0")/lib/common.sh"
 
 seeds=20
-out="$PC_EKF_ROOT/results/robustness"
+out="$PC_EKF_RESULTS/robustness"
 rows=""
 while [ $# -gt 0 ]; do
   case "$1" in

@@ -33,13 +33,11 @@ trap pc_ekf_stop_owned EXIT
 trap 'exit 130' INT TERM
 
 pc_ekf_ensure_packages
-if [ ! -x "$PC_EKF_WS/devel/lib/pc_ekf/estimator_node" ]; then
-  pc_ekf_log "building (log: .build/build.log)"
-  pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
-    tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; exit 1; }
+if [ ! -x "$PC_EKF_EXE_DIR/estimator_node" ]; then
+  pc_ekf_build || exit 1
 fi
 pc_ekf_source_workspace
-out="$PC_EKF_ROOT/.build/live"
+out="$PC_EKF_STATE/live"
 mkdir -p "$out"
 
 export ROS_MASTER_URI=${ROS_MASTER_URI:-http://localhost:$port}
@@ -62,13 +60,13 @@ fi
 export ROS_NAMESPACE=$ns
 # shellcheck disable=SC2086  # node_args: several words on purpose
 pc_ekf_start_owned estimator_node "$out/estimator_node.log" \
-  "$PC_EKF_WS/devel/lib/pc_ekf/estimator_node" "_config_file:=$config" __name:=estimator_node $node_args
+  "$PC_EKF_EXE_DIR/estimator_node" "_config_file:=$config" __name:=estimator_node $node_args
 node=$PC_EKF_LAST_PID
 prefix=${ns:+/$ns}
 echo "estimator_node ${prefix}/estimator_node is running (log: ${out#"$PC_EKF_ROOT"/}/estimator_node.log)."
 echo "It listens on ${prefix}/suspension/joint_states (and ${prefix}/road/profile for road.source: topic)."
 echo "In another shell:"
-echo "  source ${PC_EKF_WS}/devel/setup.bash; export ROS_MASTER_URI=$ROS_MASTER_URI"
+echo "  source $PC_EKF_SETUP; export ROS_MASTER_URI=$ROS_MASTER_URI"
 echo "  rostopic echo -n 1 ${prefix}/parameter_estimate; rostopic hz ${prefix}/parameter_estimate"
 echo "  rosservice call ${prefix}/estimator_node/estimate_batch; rosservice call ${prefix}/estimator_node/reset"
 echo "Ctrl-C stops it."

@@ -13,6 +13,7 @@
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"
+pc_ekf_require_sources test.sh
 source "$here/lib/fuzz.sh"
 source "$here/lib/sanitize.sh"
 source "$here/lib/package_checks.sh"

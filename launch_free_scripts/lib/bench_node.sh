@@ -11,6 +11,7 @@
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/common.sh"
+pc_ekf_require_sources bench_node.sh
 source "$here/roscore.sh"
 
 bin=$1

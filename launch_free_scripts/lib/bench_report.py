@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """bench.sh's report: reads the Google Benchmark JSON outputs (DIR/raw/*.json)
 and the node measurement (DIR/node/node.json), writes DIR/bench.json (the
-issue's keys first, then every detail) and prints one table.
+headline keys first, then every detail) and prints one table.
 
 Usage: bench_report.py DIR [ELAPSED_SECONDS]
 """

@@ -9,7 +9,7 @@ by a Debian package in the closure of that list. For each thing used:
     rosdep keys via a header or library they provide),
   - every command the README and the scripts run (ros*, catkin_*, colcon,
     `rosrun nodelet nodelet`, compilers and helpers),
-  - every Python module imported by launch_free_scripts/lib/*.py,
+  - every Python module imported by launch_free_scripts/lib/*.py and scripts/*,
 this finds the file it resolves to, the Debian package owning it (`dpkg -S`),
 and fails naming that package when it is neither listed nor pulled in
 (`apt-cache depends --recurse --installed` of the list). Something that does
@@ -33,6 +33,8 @@ SYSTEM_KEYS = {
     "boost": ["/usr/include/boost/version.hpp"],
     "gtest": ["/usr/include/gtest/gtest.h", "/usr/src/googletest/CMakeLists.txt"],
     "benchmark": ["/usr/include/benchmark/benchmark.h"],
+    "python3-matplotlib": ["/usr/lib/python3/dist-packages/matplotlib/__init__.py"],
+    "python3-tk": ["/usr/lib/python3.11/tkinter/__init__.py"],
 }
 
 # Commands run by the scripts and the README that the word scan below does
@@ -127,14 +129,26 @@ def command_uses():
     return uses
 
 
+def python_sources():
+    """launch_free_scripts/lib/*.py and the Python programs in scripts/."""
+    lib = os.path.join(ROOT, "launch_free_scripts", "lib")
+    paths = [os.path.join(lib, n) for n in sorted(os.listdir(lib)) if n.endswith(".py")]
+    scripts = os.path.join(ROOT, "scripts")
+    for name in sorted(os.listdir(scripts)) if os.path.isdir(scripts) else []:
+        path = os.path.join(scripts, name)
+        if os.path.isfile(path):
+            with open(path, encoding="utf-8") as f:
+                if "python" in f.readline():
+                    paths.append(path)
+    return paths
+
+
 def python_module_uses():
     lib = os.path.join(ROOT, "launch_free_scripts", "lib")
     local = {n[:-3] for n in os.listdir(lib) if n.endswith(".py")}
     modules = set()
-    for name in sorted(os.listdir(lib)):
-        if not name.endswith(".py"):
-            continue
-        for node in ast.walk(ast.parse(open(os.path.join(lib, name)).read())):
+    for path in python_sources():
+        for node in ast.walk(ast.parse(open(path).read())):
             if isinstance(node, ast.Import):
                 modules.update(a.name.split(".")[0] for a in node.names)
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:

@@ -1,18 +1,39 @@
 # Shared by the launch-free scripts: apt dependencies and the catkin workspace.
-# Source it; it sets PC_EKF_ROOT, PC_EKF_WS and puts /usr/bin first in PATH
-# (a pyenv python3 earlier on PATH lacks catkin_pkg and breaks catkin).
+# Source it; it sets PC_EKF_ROOT, PC_EKF_WS, PC_EKF_STATE (where runs write),
+# PC_EKF_RESULTS, PC_EKF_EXE_DIR, PC_EKF_SETUP and puts /usr/bin first in PATH (a pyenv
+# python3 earlier on PATH lacks catkin_pkg and breaks catkin).
+#
+# The scripts run from a clone (they build .build/catkin_ws and write below
+# .build) or from an install space (`catkin_make install`: they are in
+# share/pc_ekf/launch_free_scripts, next to no CMakeLists.txt; they use the
+# installed executables, build nothing and write below ROS_HOME, ~/.ros).
 
 PC_EKF_ROOT=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 PC_EKF_WS=${PC_EKF_WS:-$PC_EKF_ROOT/.build/catkin_ws}
 export PATH=/usr/bin:/bin:/usr/sbin:/sbin:$PATH
-export ROS_HOME=${ROS_HOME:-$PC_EKF_ROOT/.build/ros_home}
-export ROS_LOG_DIR=${ROS_LOG_DIR:-$ROS_HOME/log}
+if [ -f "$PC_EKF_ROOT/CMakeLists.txt" ]; then
+  PC_EKF_INSTALLED=0
+  PC_EKF_STATE=$PC_EKF_ROOT/.build
+  export ROS_HOME=${ROS_HOME:-$PC_EKF_STATE/ros_home}
+  export ROS_LOG_DIR=${ROS_LOG_DIR:-$ROS_HOME/log}
+  PC_EKF_EXE_DIR=$PC_EKF_WS/devel/lib/pc_ekf
+  PC_EKF_SETUP=$PC_EKF_WS/devel/setup.bash
+  PC_EKF_RESULTS=$PC_EKF_ROOT/results
+else
+  PC_EKF_INSTALLED=1
+  PC_EKF_PREFIX=$(cd "$PC_EKF_ROOT/../.." && pwd)
+  PC_EKF_STATE=${ROS_HOME:-$HOME/.ros}/pc_ekf
+  PC_EKF_EXE_DIR=$PC_EKF_PREFIX/lib/pc_ekf
+  PC_EKF_SETUP=$PC_EKF_PREFIX/setup.bash
+  PC_EKF_RESULTS=$PC_EKF_STATE/results
+fi
 
 PC_EKF_APT_PACKAGES=(
   build-essential cmake libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev
   libbenchmark-dev ros-core-dev python3-rostest python3-roslaunch python3-rosmaster
   python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev libnodeletlib-tools colcon
   python3-colcon-ros python3-matplotlib python3-numpy python3-rospy python3-std-srvs
+  python3-tk                     # plot_estimates' live window (matplotlib's TkAgg)
   catkin-lint                    # test.sh: the package is catkin_lint clean
   clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
 )
@@ -50,21 +71,38 @@ pc_ekf_catkin_make() {
      -DCATKIN_ENABLE_TESTING=ON "$@" -j"$(nproc)")
 }
 
+# Builds from the sources (log .build/build.log; arguments go to catkin_make);
+# an install space is used as it is.
+pc_ekf_build() {
+  [ "$PC_EKF_INSTALLED" = 1 ] && return 0
+  pc_ekf_log "building (log: .build/build.log)"
+  mkdir -p "$PC_EKF_ROOT/.build"
+  pc_ekf_catkin_make "$@" >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
+    tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; return 1; }
+}
+
+# For the scripts that build and test the package itself (test.sh, bench.sh,
+# fuzz.sh): refuses to run from an install space, naming the script.
+pc_ekf_require_sources() {
+  [ "$PC_EKF_INSTALLED" = 0 ] && return 0
+  echo "$1: builds and tests pc_ekf from its sources, which an install space does not" \
+    "have ($PC_EKF_ROOT); run it from a clone of the repository" >&2
+  exit 2
+}
+
 pc_ekf_source_workspace() {
   # setup.bash reads unset variables; relax nounset around it.
   set +u
-  # shellcheck disable=SC1091
-  source "$PC_EKF_WS/devel/setup.bash"
+  # shellcheck disable=SC1090
+  source "$PC_EKF_SETUP"
   set -u
 }
 
 # Sets PC_EKF_BIN (the tools' folder): as given, or installs what is missing
-# and builds (log .build/build.log).
+# and builds (log .build/build.log); the install space's own from there.
 pc_ekf_tools_bin() {
   [ -n "${PC_EKF_BIN:-}" ] && return 0
   pc_ekf_ensure_packages || return 1
-  pc_ekf_log "building (log: .build/build.log)"
-  pc_ekf_catkin_make >"$PC_EKF_ROOT/.build/build.log" 2>&1 || {
-    tail -30 "$PC_EKF_ROOT/.build/build.log" >&2; return 1; }
-  PC_EKF_BIN="$PC_EKF_WS/devel/lib/pc_ekf"
+  pc_ekf_build || return 1
+  PC_EKF_BIN=$PC_EKF_EXE_DIR
 }

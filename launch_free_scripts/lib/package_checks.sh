@@ -1,8 +1,11 @@
 # test.sh's install-space case: `catkin_make install` in the test workspace,
 # then the example model package (test/plugin_example/pc_ekf_quarter_car)
 # built in a workspace of its own against the install space only (its
-# <pc_ekf/...> headers, libraries and pluginlib), and the installed
-# estimate_offline run once. Writes RESULTS_DIR/install_space.xml (one case).
+# <pc_ekf/...> headers, libraries and pluginlib), the installed
+# estimate_offline run once, no link from the install space into the sources,
+# and, in an environment with the install space alone (lib/install_space_run.sh):
+# rosrun estimator_node, demo.sh, plot_estimates. Writes
+# RESULTS_DIR/install_space.xml (one case).
 pc_ekf_install_check() {
   local results=$1 log=$PC_EKF_ROOT/.build/install_check.log status=ok why=""
   local down=$PC_EKF_ROOT/.build/downstream_ws
@@ -21,6 +24,13 @@ pc_ekf_install_check() {
       status=FAILED why="the installed estimate_offline failed"
     elif grep -rq -- "$PC_EKF_ROOT/src" "$down/build/pc_ekf_quarter_car/CMakeFiles/pc_ekf_quarter_car.dir/flags.make"; then
       status=FAILED why="the example package saw the source tree's headers"
+    elif find "$PC_EKF_WS/install" -type l -lname "$PC_EKF_ROOT/*" | grep -q .; then
+      status=FAILED why="the install space links into the source tree: $(find "$PC_EKF_WS/install" -type l -lname "$PC_EKF_ROOT/*" | head -3)"
+    elif ! env -i HOME="$HOME" PATH=/usr/bin:/bin:/usr/sbin:/sbin \
+             ROS_HOME="$PC_EKF_ROOT/.build/install_space_home" \
+             bash "$PC_EKF_ROOT/launch_free_scripts/lib/install_space_run.sh" \
+             "$PC_EKF_WS/install" >>"$log" 2>&1; then
+      status=FAILED why="$(grep "install space: FAILED" "$log" | tail -1)"
     fi
   fi
   mkdir -p "$results"
@@ -36,23 +46,24 @@ PY
   [ "$status" = ok ] || pc_ekf_log "install space check FAILED: $why (log: .build/install_check.log)"
 }
 
-# test.sh's catkin_lint case: no errors in pc_ekf or the example package
-# (warnings are listed in the log). Writes RESULTS_DIR/catkin_lint.xml.
+# test.sh's catkin_lint case: no error and no warning in pc_ekf or the
+# example package (--strict makes warnings fail too; notices, -W2, are not
+# checked). Writes RESULTS_DIR/catkin_lint.xml.
 pc_ekf_lint_check() {
   local results=$1 log=$PC_EKF_ROOT/.build/catkin_lint.log status=ok
-  (cd "$PC_EKF_WS/src" && catkin_lint -W1 .) >"$log" 2>&1 || status=FAILED
-  grep -q ": error: " "$log" && status=FAILED
+  (cd "$PC_EKF_WS/src" && catkin_lint -W1 --strict .) >"$log" 2>&1 || status=FAILED
+  grep -qE ": (error|warning): " "$log" && status=FAILED
   mkdir -p "$results"
   /usr/bin/python3 - "$results/catkin_lint.xml" "$status" "$log" <<'PY'
 import sys, xml.etree.ElementTree as ET
 out, status, log = sys.argv[1:]
 text = open(log).read()
 suite = ET.Element("testsuite", name="catkin_lint", tests="1", failures="0" if status == "ok" else "1")
-case = ET.SubElement(suite, "testcase", classname="catkin_lint", name="errors")
+case = ET.SubElement(suite, "testcase", classname="catkin_lint", name="clean")
 ET.SubElement(case, "system-out").text = text
 if status != "ok":
-    errors = [l for l in text.splitlines() if ": error: " in l]
-    ET.SubElement(case, "failure", message="%d catkin_lint errors" % len(errors)).text = "\n".join(errors) or text[-2000:]
+    problems = [l for l in text.splitlines() if ": error: " in l or ": warning: " in l]
+    ET.SubElement(case, "failure", message="%d catkin_lint errors and warnings" % len(problems)).text = "\n".join(problems) or text[-2000:]
 ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
 PY
   [ "$status" = ok ] || pc_ekf_log "catkin_lint FAILED (log: .build/catkin_lint.log)"

@@ -18,7 +18,7 @@ TRUTH_XI = (0.2326, -0.3875)
 TRUTH = tuple(n * (1 + r * x) for n, r, x in zip(NOMINAL, RANGE, TRUTH_XI))
 METHODS = ["one_step_paper", "one_step_square_root", "whole_set_paper", "whole_set_square_root",
            "es_mda", "enkf_small", "enkf_large", "grid"]
-# Paper cases (SPEC §4): data set, the paper's method, its reported xi (or text).
+# Paper cases (docs/method.md §6): data set, the paper's method, its reported xi (or text).
 CASES = [
     ("A", "bump10", "one_step_paper", "0.2240, -0.4415"),
     ("B", "bump100", "one_step_paper", "0.3988, -0.0834 (diverged)"),
@@ -97,7 +97,7 @@ def fmt(v, digits=3):
 
 
 def write_markdown(out, summary, seeds, elapsed):
-    lines = ["# Reproduction of Blanchard, Sandu & Sandu (2008), SPEC §4", "",
+    lines = ["# Reproduction of Blanchard, Sandu & Sandu (2008), docs/method.md §6", "",
              f"{seeds} seeds per data set (noise seeds 1..{seeds}); truth M = {TRUTH[0]:.2f} kg, "
              f"d_CG = {TRUTH[1]:.4f} m (xi = {TRUTH_XI[0]}, {TRUTH_XI[1]}). Wall time {elapsed} s.",
              "Columns: mean ± spread over seeds of the estimates; mean reported std; coverage of "

@@ -1,4 +1,4 @@
-// Whole-set-of-data-at-once update (SPEC §3.4, paper eq. 33-37) and its
+// Whole-set-of-data-at-once update (docs/method.md §4.4, paper eq. 33-37) and its
 // iterated form ES-MDA (Emerick & Reynolds 2013): forecast every collocation
 // point over the whole record from t = 0 with the current parameter
 // expansion, stack all observations, update the parameter coefficients.

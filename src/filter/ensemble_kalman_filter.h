@@ -1,4 +1,4 @@
-// Monte-Carlo ensemble Kalman filter with perturbed observations (SPEC §3.5):
+// Monte-Carlo ensemble Kalman filter with perturbed observations (docs/method.md §4.7):
 // the cost/accuracy baseline for the PC-EKF, on the same model and data.
 #pragma once
 
@@ -20,8 +20,8 @@ struct EnkfSettings {
   NoiseModel noise;
   IntegratorSettings integration;
   int threads = 2;
-  // false: perturbed observations (SPEC §3.5, the baseline). true: the serial
-  // square-root rule of SPEC §3.3 on the ensemble (an EAKF), which isolates
+  // false: perturbed observations (docs/method.md §4.7, the baseline). true: the serial
+  // square-root rule of docs/method.md §4.3 on the ensemble (an EAKF), which isolates
   // the effect of observation perturbations when comparing with the PC-EKF.
   bool square_root = false;
 };

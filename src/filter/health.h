@@ -1,4 +1,4 @@
-// Per-update health checks (SPEC §3.6): NIS against two-sided chi-square
+// Per-update health checks (docs/method.md §5): NIS against two-sided chi-square
 // bounds and its windowed average, PDF mass outside the prior support,
 // non-finite values, and the paper's nested-band criterion (informational
 // only: the exact posterior violates it at most steps).
@@ -70,7 +70,7 @@ class HealthMonitor {
   Eigen::VectorXd last_mean_, last_std_;
 };
 
-// Multi-rate coherence (SPEC §3.6): |m_full - m_dec| / sqrt(s_full^2 + s_dec^2).
+// Multi-rate coherence (docs/method.md §5.2): |m_full - m_dec| / sqrt(s_full^2 + s_dec^2).
 Eigen::VectorXd coherenceDisagreement(const Eigen::VectorXd& mean_full,
                                       const Eigen::VectorXd& std_full,
                                       const Eigen::VectorXd& mean_decimated,

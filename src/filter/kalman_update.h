@@ -1,4 +1,4 @@
-// The PC Kalman update of SPEC §3.2-§3.4, done in the (S-1)-dimensional space
+// The PC Kalman update of docs/method.md §4.2-§4.4, done in the (S-1)-dimensional space
 // of the higher PC coefficients so its cost is linear in the number of
 // observations (one sample's channels or a whole stacked record).
 //
@@ -14,7 +14,7 @@ namespace pc_ekf {
 
 enum class UpdateRule {
   kPaper,       // paper eq. 28-32: X_j <- (I - K H) X_j, covariance (I-KH)P(I-KH)^T
-  kSquareRoot,  // serial Whitaker-Hamill square root, covariance (I-KH)P (SPEC §3.3)
+  kSquareRoot,  // serial Whitaker-Hamill square root, covariance (I-KH)P (docs/method.md §4.3)
 };
 std::string toString(UpdateRule u);
 UpdateRule updateRuleFromString(const std::string& s);  // throws std::invalid_argument

@@ -1,5 +1,5 @@
 // Measurements as the estimators consume them: one sample per time, any
-// subset of the model's channels (SPEC §1.6).
+// subset of the model's channels (docs/method.md §1.6).
 #pragma once
 
 #include <Eigen/Dense>

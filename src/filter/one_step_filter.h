@@ -1,4 +1,4 @@
-// One-step-at-a-time PC-EKF (SPEC §3.2, §3.3): forecast to each sample's
+// One-step-at-a-time PC-EKF (docs/method.md §4.2, §4.3): forecast to each sample's
 // time, update with the paper or the square-root rule, report the
 // parameters' distribution and health after every sample.
 #pragma once

@@ -1,5 +1,5 @@
 // Forecast of the extended PC state X = [y; theta] by stochastic collocation
-// (SPEC §3.1): evaluate X at the collocation points, integrate each point's
+// (docs/method.md §4.1): evaluate X at the collocation points, integrate each point's
 // model, project back onto the basis.
 #pragma once
 

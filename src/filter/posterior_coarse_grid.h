@@ -1,4 +1,4 @@
-// Step 1 of the reference posterior (SPEC §3.5): a global tensor grid over the
+// Step 1 of the reference posterior (docs/method.md §4.6): a global tensor grid over the
 // prior's range, and a cache of the model's channels on it. The simulations do
 // not depend on the data, only on the model, the mapping and the sample times,
 // so one cache serves every noise draw (reproduction over many seeds).

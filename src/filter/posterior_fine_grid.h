@@ -1,4 +1,4 @@
-// Step 3 of the reference posterior (SPEC §3.5): a tensor trapezoid grid along
+// Step 3 of the reference posterior (docs/method.md §4.6): a tensor trapezoid grid along
 // the principal axes of a mode's Gauss-Newton Hessian, enlarged until the
 // density on its border is negligible. Several modes integrate the union of
 // their boxes: a node inside an earlier mode's box belongs to that mode only,

@@ -1,4 +1,4 @@
-// Step 2 of the reference posterior (SPEC §3.5): Levenberg-Marquardt on the
+// Step 2 of the reference posterior (docs/method.md §4.6): Levenberg-Marquardt on the
 // negative log posterior F = 1/2 |r|^2 - log prior, started from the coarse
 // grid's local maxima. All starts iterate together so that every residual
 // evaluation (trial points and finite-difference stencils) is one batch.

@@ -1,4 +1,4 @@
-// Prior of the reference posterior (SPEC §3.5): the product of the germ
+// Prior of the reference posterior (docs/method.md §4.6): the product of the germ
 // densities, its derivatives for the mode search, and the ranges the grids cover.
 #pragma once
 

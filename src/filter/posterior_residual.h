@@ -1,6 +1,6 @@
-// Whitened residuals of the reference posterior (SPEC §3.5): the likelihood is
+// Whitened residuals of the reference posterior (docs/method.md §4.6): the likelihood is
 // exp(-1/2 |r(xi)|^2), r = (z - h(xi)) / sqrt(R) stacked over samples and
-// observed channels, R from NoiseModel::variances (the filters' R, SPEC §1.6).
+// observed channels, R from NoiseModel::variances (the filters' R, docs/method.md §1.6).
 // Behind an interface so the posterior machinery can be tested on synthetic
 // likelihoods with known answers.
 #pragma once
@@ -37,7 +37,7 @@ Eigen::VectorXd logLikelihood(const Eigen::MatrixXd& residuals);
 Eigen::MatrixXd whitenedResiduals(const MeasurementSeries& series, const NoiseModel& noise,
                                   const std::vector<Eigen::MatrixXd>& channels);
 
-// Simulates the germ points xi (count x B) through `times` (SPEC §1.6 channels);
+// Simulates the germ points xi (count x B) through `times` (docs/method.md §1.6 channels);
 // columns whose parameters are inadmissible stay NaN and are not simulated.
 // Adds the number of simulated columns to *simulations when given.
 std::vector<Eigen::MatrixXd> simulateGermChannels(const MechanicalModel& model,

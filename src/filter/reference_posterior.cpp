@@ -1,4 +1,4 @@
-// Reference posterior, SPEC §3.5: orchestration of the four steps.
+// Reference posterior, docs/method.md §4.6: orchestration of the four steps.
 #include "pc_ekf/filter/reference_posterior.h"
 
 #include <algorithm>
@@ -76,7 +76,7 @@ Eigen::VectorXd coarseLogPosterior(const PosteriorResidual& residual, const Coar
   return l;
 }
 
-// value = nominal (1 + range xi) is affine per parameter (SPEC §1.1).
+// value = nominal (1 + range xi) is affine per parameter (docs/method.md §1.1).
 void toParameterUnits(ReferencePosterior& r, const ParameterMapping& mapping) {
   r.names = mapping.names();
   for (int i = 0; i < mapping.count(); ++i) {

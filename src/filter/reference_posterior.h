@@ -1,4 +1,4 @@
-// The exact Bayesian posterior of the germs given the data (SPEC §3.5): prior
+// The exact Bayesian posterior of the germs given the data (docs/method.md §4.6): prior
 // density x Gaussian likelihood of all samples with the filters' R. Its mean
 // and std are the truth every filter is judged against.
 //   (1) coarse global grid -> local maxima, (2) Levenberg-Marquardt per maximum,
@@ -29,7 +29,7 @@ struct ReferencePosteriorSettings {
   double border_mass_tolerance = 1e-6;  // border mass / mode mass
   int threads = 2;
   int bins = 60;  // marginal histograms
-  // Beyond the list: how many coarse local maxima are refined (best
+  // Tuning knobs: how many coarse local maxima are refined (best
   // coarse values first), and how far below the best refined peak a mode may
   // lie (log density) and still get a fine grid. The margin is applied after
   // refinement: with std ~1e-4 the coarse values say little about the peaks.

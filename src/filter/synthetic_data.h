@@ -1,4 +1,4 @@
-// Synthetic measurements from the truth model (SPEC §1.6): simulate at the
+// Synthetic measurements from the truth model (docs/method.md §1.6): simulate at the
 // truth parameters, sample at t_k, add seeded Gaussian noise with standard
 // deviation sqrt((relative * z_true)^2 + floor^2).
 //

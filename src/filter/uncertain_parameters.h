@@ -1,5 +1,5 @@
 // The uncertain parameters theta of the extended state [y; theta] and their
-// map into the model's full parameter vector (SPEC §1.1, §3).
+// map into the model's full parameter vector (docs/method.md §1.1, §4).
 #pragma once
 
 #include <Eigen/Dense>
@@ -12,7 +12,7 @@
 
 namespace pc_ekf {
 
-// value = nominal * (1 + relative_range * xi), xi the germ (SPEC §1.1).
+// value = nominal * (1 + relative_range * xi), xi the germ (docs/method.md §1.1).
 struct UncertainParameter {
   std::string name;  // one of the model's parameter names
   double nominal = 0.0;

@@ -46,7 +46,7 @@ struct RoadConfig {
   std::vector<CourseSegment> course;  // source: course
 };
 
-// Samples at t_k = k * duration / samples, k = 1..samples (SPEC §1.6).
+// Samples at t_k = k * duration / samples, k = 1..samples (docs/method.md §1.6).
 struct SamplingConfig {
   int samples = 10;
   double duration = 3.0;
@@ -148,7 +148,7 @@ struct NodeConfig {
   int max_batch_samples = 100000;  // kept for ~estimate_batch (the first ones)
   int max_road_samples = 1000000;  // road buffer bound
   int queue_size = 20000;          // subscriber and publisher queues
-  bool coherence_check = true;     // second filter on every k-th sample (SPEC §3.6)
+  bool coherence_check = true;     // second filter on every k-th sample (docs/method.md §5.2)
   BatchMethod batch_method = BatchMethod::kEsMda;
 };
 

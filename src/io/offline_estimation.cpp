@@ -113,7 +113,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   }
   r->healthy = !nonfinite && last.health.healthy();
 
-  // Multi-rate coherence (SPEC §3.6): the same filter on every k-th sample.
+  // Multi-rate coherence (docs/method.md §5.2): the same filter on every k-th sample.
   const int k = c.health.coherence_decimation;
   const MeasurementSeries dec = decimate(series, k);
   r->coherence.decimation = k;

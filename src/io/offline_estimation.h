@@ -1,6 +1,6 @@
 // Runs one estimator over a whole measurement record (estimate_offline, the
 // reproduction scripts and the tests share this path) and reports the
-// INTERFACE.md JSON, per-sample CSV and final PDFs.
+// The JSON of docs/method.md §8.3, per-sample CSV and final PDFs.
 #pragma once
 
 #include <Eigen/Dense>

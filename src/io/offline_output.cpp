@@ -1,4 +1,4 @@
-// JSON and CSV output of estimate_offline (INTERFACE.md).
+// JSON and CSV output of estimate_offline (docs/method.md §8.3).
 #include <sys/stat.h>
 
 #include <cerrno>

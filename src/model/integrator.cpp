@@ -1,4 +1,4 @@
-// Explicit Runge-Kutta between the input's kinks (SPEC §1.5, §5).
+// Explicit Runge-Kutta between the input's kinks (docs/method.md §1.7, §7).
 #include "pc_ekf/model/integrator.h"
 
 #include <algorithm>

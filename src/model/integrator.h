@@ -1,6 +1,6 @@
 // Propagates a batch of model states (one column per collocation point) over
 // an interval: an explicit Runge-Kutta method on a uniform grid within each
-// kink-free segment, stopping exactly at the input's breakpoints (SPEC §1.5).
+// kink-free segment, stopping exactly at the input's breakpoints (docs/method.md §1.5, §1.7).
 #pragma once
 
 #include <Eigen/Dense>

@@ -1,5 +1,5 @@
 // The interface every mechanical system implements so that the filters never
-// depend on a particular model (ENGINEERING.md). All evaluation is batched over
+// depend on a particular model (docs/method.md §2.6). All evaluation is batched over
 // the collocation points: states and parameters are columns.
 #pragma once
 

@@ -11,7 +11,7 @@ namespace {
 
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 
-// Times of the four corners of one trapezoid that starts at travel `start` (SPEC §1.5).
+// Times of the four corners of one trapezoid that starts at travel `start` (docs/method.md §1.5).
 void addCorners(const SpeedBumpSettings& s, double start, double t0, double t1,
                 std::vector<double>& out) {
   const double v = s.speed_kmh / 3.6;

@@ -1,4 +1,4 @@
-// Known road excitation under the two tyres (SPEC §1.5).
+// Known road excitation under the two tyres (docs/method.md §1.5).
 #pragma once
 
 #include <Eigen/Dense>
@@ -44,7 +44,7 @@ struct SpeedBumpSettings {
 // over `flat`, ramp down over `down`; 0 outside; zero-length ramps are steps.
 double unitTrapezoid(double d, double up, double flat, double down);
 
-// Trapezoid bump seen by both tyres, tyre 2 delayed (SPEC §1.5).
+// Trapezoid bump seen by both tyres, tyre 2 delayed (docs/method.md §1.5).
 class SpeedBumpRoad : public RoadInput {
  public:
   explicit SpeedBumpRoad(const SpeedBumpSettings& s);

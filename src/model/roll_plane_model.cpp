@@ -1,4 +1,4 @@
-// Roll-plane vehicle model (SPEC §1): parameter checks and batched right-hand side.
+// Roll-plane vehicle model (docs/method.md §1): parameter checks and batched right-hand side.
 #include "pc_ekf/model/roll_plane_model.h"
 
 #include <algorithm>
@@ -67,7 +67,7 @@ struct PointConstants {
   }
 };
 
-// F_K(delta) - F_K(delta - u) expanded so that it is exactly 0 at u = 0 (SPEC §1.4).
+// F_K(delta) - F_K(delta - u) expanded so that it is exactly 0 at u = 0 (docs/method.md §1.4).
 inline double springIncrement(double u, double k, double k3, double three_delta,
                               double three_delta_sq) {
   return u * (k + k3 * (three_delta_sq - three_delta * u + u * u));
@@ -206,7 +206,7 @@ class RollPlaneBatch : public ModelBatch {
   int pointCount() const override { return static_cast<int>(c_.size()); }
 
   Eigen::ArrayXXd initialState() const override {
-    return Eigen::ArrayXXd::Zero(8, pointCount());  // equilibrium (SPEC §1.4)
+    return Eigen::ArrayXXd::Zero(8, pointCount());  // equilibrium (docs/method.md §1.4)
   }
 
   void derivatives(double t, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const override {
@@ -284,7 +284,7 @@ RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
         nominal_.damper_tanh_scale >= 0.0 && nominal_.damper_tanh_rate >= 0.0)) {
     throw std::invalid_argument("RollPlaneModel: damper tanh scale and rate must be finite, >= 0");
   }
-  // u_i = x_i - xr_i, v_i = xidot - xridot (SPEC §1.6).
+  // u_i = x_i - xr_i, v_i = xidot - xridot (docs/method.md §1.6).
   for (int i = 0; i < 2; ++i) {
     h_(i, i) = 1.0;
     h_(i, 2 + i) = -1.0;
@@ -398,7 +398,7 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
       c(q, C::kTyre + i) = p.tyre_stiffness[i];
       c(q, C::kInvUnsprung + i) = 1.0 / p.unsprung_mass[i];
     }
-    // I_cg = I + m (L/2 - D)^2 + M (D - d_CG)^2 (SPEC §1.4).
+    // I_cg = I + m (L/2 - D)^2 + M (D - d_CG)^2 (docs/method.md §1.4).
     const double inertia =
         p.bar_inertia + p.bar_mass * (0.5 * length - cg) * (0.5 * length - cg) +
         p.added_mass * (cg - p.added_mass_position) * (cg - p.added_mass_position);

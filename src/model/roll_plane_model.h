@@ -1,4 +1,4 @@
-// The nonlinear 4-DOF roll-plane vehicle model of SPEC §1.
+// The nonlinear 4-DOF roll-plane vehicle model of docs/method.md §1.
 //
 // State (deviations from the static equilibrium, up positive):
 //   [x1, x2, xr1, xr2, x1dot, x2dot, xr1dot, xr2dot]
@@ -14,7 +14,7 @@ namespace pc_ekf {
 
 enum class DamperLaw { kTanh, kLinear };
 
-// Names of the full parameter vector, in order (SPEC §1.1).
+// Names of the full parameter vector, in order (docs/method.md §1.1).
 //   bar_mass, unsprung_mass_left, unsprung_mass_right, damping_left, damping_right,
 //   spring_linear_left, spring_linear_right, spring_cubic_left, spring_cubic_right,
 //   bar_length, bar_inertia, tyre_stiffness_left, tyre_stiffness_right, gravity,
@@ -42,7 +42,7 @@ struct VehicleParameters {
 
 const std::vector<std::string>& vehicleParameterNames();
 
-// Static equilibrium of SPEC §1.3 for one parameter vector.
+// Static equilibrium of docs/method.md §1.3 for one parameter vector.
 struct StaticEquilibrium {
   double combined_cg = 0.0;            // D, from the left end
   double spring_compression[2] = {0, 0};  // delta_i

@@ -1,5 +1,5 @@
-// Inline tanh and cos for the damper law and the roll lever (SPEC §1.2, §1.4): glibc's
-// calls were 2/3 of the RK4 cost (ENGINEERING.md, Numerics). Accuracy: a few ulp.
+// Inline tanh and cos for the damper law and the roll lever (docs/method.md §1.2, §1.4): glibc's
+// calls were 2/3 of the RK4 cost. Accuracy: a few ulp.
 //
 // Everything here is straight-line arithmetic (no branch, no library call on
 // the common path), so a loop over the collocation points that calls these

@@ -1,4 +1,4 @@
-// Static equilibrium of the roll-plane model (SPEC §1.3).
+// Static equilibrium of the roll-plane model (docs/method.md §1.3).
 #include <algorithm>
 #include <cmath>
 #include <sstream>

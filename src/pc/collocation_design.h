@@ -1,4 +1,4 @@
-// Collocation points and the least-squares projector onto the basis (SPEC §2).
+// Collocation points and the least-squares projector onto the basis (docs/method.md §3.4, §3.5).
 #pragma once
 
 #include <Eigen/Dense>

@@ -1,5 +1,5 @@
 // Random germs of the polynomial chaos expansion and their Wiener-Askey
-// polynomial families (SPEC §2).
+// polynomial families (docs/method.md §3.1).
 #pragma once
 
 #include <string>

@@ -1,4 +1,4 @@
-// Statistics of PC expansions from their coefficients (SPEC §2).
+// Statistics of PC expansions from their coefficients (docs/method.md §3.6).
 // Coefficient matrices hold one quantity per row, one basis term per column;
 // column 0 is the mean (psi_1 = 1).
 #pragma once

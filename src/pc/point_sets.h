@@ -1,4 +1,4 @@
-// Low-discrepancy point sets on the unit cube and their map to the germs (SPEC §2).
+// Low-discrepancy point sets on the unit cube and their map to the germs (docs/method.md §3.4).
 #pragma once
 
 #include <Eigen/Dense>

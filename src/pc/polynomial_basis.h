@@ -1,4 +1,4 @@
-// Multivariate total-degree orthonormal basis (SPEC §2).
+// Multivariate total-degree orthonormal basis (docs/method.md §3.3).
 #pragma once
 
 #include <Eigen/Dense>

@@ -1,4 +1,4 @@
-// Scalar distribution functions behind the germs' CDFs and inverse CDFs (SPEC §2).
+// Scalar distribution functions behind the germs' CDFs and inverse CDFs (docs/method.md §3.1).
 #pragma once
 
 #include <functional>

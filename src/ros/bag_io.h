@@ -1,11 +1,11 @@
-// Bags in the layout of INTERFACE.md (rosbag C++ API; ROS-dependent, part of
+// Bags in the layout of docs/method.md §8.2 (rosbag C++ API; ROS-dependent, part of
 // pc_ekf_ros, not of the ROS-free pc_ekf_io):
 //   road/profile             pc_ekf/RoadProfile       road heights under the tyres
 //   suspension/joint_states  sensor_msgs/JointState   the samples (u = position, v = velocity)
 //   ground_truth             pc_ekf/ParameterEstimate true values (synthesize_bag only)
 // Topics match on their suffix, so a leading namespace (/car1/road/profile)
 // is accepted. Times are header stamps; t = 0 is the stamp of the first
-// road/profile message (the vehicle at rest, INTERFACE.md "Time origin").
+// road/profile message (the vehicle at rest, docs/method.md §8.1).
 #pragma once
 
 #include <pc_ekf/ParameterEstimate.h>

@@ -1,6 +1,6 @@
 // What estimator_node reports on /diagnostics (diagnostic_updater): the
 // configuration, the input (rate, samples processed, rejections by reason)
-// and the filter's health (SPEC §3.6) with the last update latency.
+// and the filter's health (docs/method.md §5) with the last update latency.
 #pragma once
 
 #include <diagnostic_updater/diagnostic_updater.h>
@@ -26,7 +26,7 @@ struct EstimatorCounters {
   std::map<std::string, std::uint64_t> samples_rejected;
   // Single values or joints not used (unknown_joint, duplicate_joint, non_finite).
   std::map<std::string, std::uint64_t> elements_rejected;
-  std::uint64_t nan_elements = 0;  // NaN = not observed (INTERFACE.md), not an error
+  std::uint64_t nan_elements = 0;  // NaN = not observed (docs/method.md §8.4), not an error
   // road/profile messages not used (duplicate_stamp, out_of_order, time_jump,
   // non_finite, ignored = analytic road in use).
   std::map<std::string, std::uint64_t> road_rejected;

@@ -1,6 +1,6 @@
 // The estimation state of one run of estimator_node (from start or ~reset to
 // the next): the one-step filter on every sample, a second one-step filter on
-// every k-th sample for the multi-rate coherence check (SPEC §3.6), and the
+// every k-th sample for the multi-rate coherence check (docs/method.md §5.2), and the
 // samples kept for the batch update (~estimate_batch). Messages out, core in.
 #pragma once
 

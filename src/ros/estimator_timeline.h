@@ -1,6 +1,6 @@
 // Time base of estimator_node: the time origin, the road buffer, stamp
 // ordering checks and the queue of samples waiting for road data
-// (INTERFACE.md "Time origin"). No node handles: the node feeds it messages
+// (docs/method.md §8.1). No node handles: the node feeds it messages
 // and wall-clock times, and takes back the samples the filter may process.
 #pragma once
 

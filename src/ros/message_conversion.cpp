@@ -371,7 +371,7 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
   msg.damping = result.damping;
   msg.reopened = result.reopened;
   const int unusable = result.forecast.invalid_points + result.forecast.nonfinite_points;
-  if (unusable > 0) {  // SPEC §3.2: reported, not fatal while enough points remain
+  if (unusable > 0) {  // docs/method.md §4.1: reported, not fatal while enough points remain
     msg.warnings.push_back("forecast: " + std::to_string(unusable) + " of " +
                            std::to_string(result.forecast.points) +
                            " collocation points unusable, left out of the projection (" +

@@ -26,7 +26,7 @@
 
 namespace pc_ekf {
 
-// ---- time: seconds since the time origin (INTERFACE.md "Time origin") ----
+// ---- time: seconds since the time origin (docs/method.md §8.1) ----
 
 // (stamp - origin) in seconds, from the exact nanosecond difference, so
 // stamps written by stampAt() give back the same double for times that are
@@ -122,11 +122,11 @@ void setBasis(ParameterEstimate& msg, const PolynomialBasis& basis);
 // coefficients (parameters x S) row-major plus term_count; an empty matrix
 // clears them.
 void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients);
-// Health fields of SPEC §3.6 (also sets `healthy` and `warnings`, keeping a
+// Health fields of docs/method.md §5 (also sets `healthy` and `warnings`, keeping a
 // coherence flag already set).
 void setHealth(ParameterEstimate& msg, const HealthStatus& health, int nis_channels,
                const HealthSettings& settings);
-// Multi-rate coherence (SPEC §3.6): flagged when any disagreement exceeds
+// Multi-rate coherence (docs/method.md §5.2): flagged when any disagreement exceeds
 // `threshold`; a flag makes the estimate unhealthy and adds a warning.
 void setCoherence(ParameterEstimate& msg, const Eigen::VectorXd& disagreement, int decimation,
                   double threshold);

@@ -1,6 +1,6 @@
 // Lossless replay at any speed: after publishing a sample, replay_node waits
 // for the estimator's parameter_estimate stamped like that sample before it
-// publishes the next one (issue 4, ~lossless). Callbacks come from another
+// publishes the next one, so no sample is lost. Callbacks come from another
 // thread (ros::AsyncSpinner); waits use the wall clock, so /use_sim_time
 // does not stall them.
 #pragma once

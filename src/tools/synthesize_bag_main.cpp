@@ -1,5 +1,5 @@
 // synthesize_bag: simulates the truth model of a config and writes a bag in
-// the layout of INTERFACE.md (road/profile, suspension/joint_states,
+// the layout of docs/method.md §8.2 (road/profile, suspension/joint_states,
 // ground_truth) and, with --csv, the same measurements as CSV. Exit 2 with a
 // one-line reason on bad input.
 #include <cmath>

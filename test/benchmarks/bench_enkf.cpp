@@ -1,10 +1,10 @@
-// PC-EKF vs Monte-Carlo EnKF on filtering (issue 6): over 10 noise seeds of
+// PC-EKF vs Monte-Carlo EnKF on filtering: over 10 noise seeds of
 // the paper's cases A (N = 10) and B (N = 100), the error of each filter's
-// final parameter means against the exact posterior (SPEC §3.5; coarse-grid
+// final parameter means against the exact posterior (docs/method.md §4.6; coarse-grid
 // simulations shared across seeds through CoarseGridCache):
 //   error = RMS over seeds and both parameters of (mean - posterior mean) / posterior std.
 // The benchmark finds the smallest EnKF ensemble (perturbed observations, the
-// SPEC baseline; 2 ensemble seeds per noise seed, enkf.seed + 100 e + noise
+// baseline of docs/method.md §4.7; 2 ensemble seeds per noise seed, enkf.seed + 100 e + noise
 // seed) whose error is no worse than the square-root PC-EKF's, per case and
 // in both, and reports the ratios EnKF / PC-EKF of CPU time (both on one
 // thread) and of model integrations (member- or point-intervals) at that size.

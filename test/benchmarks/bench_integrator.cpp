@@ -1,4 +1,4 @@
-// The model's right-hand side and the RK4 integrator (issue 6): cost of one
+// The model's right-hand side and the RK4 integrator: cost of one
 // derivative evaluation per point, of one 0.03 s forecast interval for the 30
 // collocation points, and the accuracy/cost curve that chose the default
 // integration.max_step: error of the sampled channels (N = 100 sample times,

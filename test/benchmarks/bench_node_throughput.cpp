@@ -1,4 +1,4 @@
-// End-to-end throughput of estimator_node (issue 6), for
+// End-to-end throughput of estimator_node, for
 // launch_free_scripts/lib/bench_node.sh: a ROS node that counts the
 // estimates on parameter_estimate while replay_node plays a bag into the
 // estimator at full speed. Not a Google Benchmark (it needs the graph).

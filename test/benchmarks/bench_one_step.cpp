@@ -1,4 +1,4 @@
-// One-step PC-EKF latency (issue 6): the paper configuration (n = 2, p = 4,
+// One-step PC-EKF latency: the paper configuration (n = 2, p = 4,
 // S = 15, Q = 30, speed bump, dt = 0.03 s) and a 1 kHz stream (dt = 1 ms).
 // Each update = forecast to the sample + square-root update + health checks
 // (OneStepFilter::process). The record is filtered `passes` times, spread

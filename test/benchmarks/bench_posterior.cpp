@@ -1,4 +1,4 @@
-// Reference posterior (SPEC §3.5) for the paper's case B (N = 100, seed 1):
+// Reference posterior (docs/method.md §4.6) for the paper's case B (N = 100, seed 1):
 // coarse 101^2 grid of full simulations + Levenberg-Marquardt + fine
 // principal-axis grids, on both cores (grid.threads = 2). Wall time.
 #include "bench_support.h"

@@ -1,4 +1,4 @@
-// PC vs Monte Carlo propagation (issue 6, the paper's claim): mean and std of
+// PC vs Monte Carlo propagation (the paper's claim): mean and std of
 // the four measured channels at the N = 100 sample times under the prior.
 //   reference: tensor Gauss-Jacobi quadrature of the germ measure, 40 x 40
 //              nodes (checked against 32 x 32: the difference is reported);

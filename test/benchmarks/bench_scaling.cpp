@@ -1,4 +1,4 @@
-// Scaling (issue 6): cost of one one-step update (forecast over dt = 0.03 s +
+// Scaling: cost of one one-step update (forecast over dt = 0.03 s +
 // square-root update + health) for PC order p = 2..8 and n = 2..4 uncertain
 // parameters (Table I: + spring_linear_left, + tyre_stiffness_left), Q = 2S;
 // and the whole-set update for N = 10^2..10^5 samples over the 3 s record,

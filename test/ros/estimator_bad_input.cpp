@@ -1,4 +1,4 @@
-// Bad input mixed into a clean stream (ENGINEERING.md "Bad measurements"):
+// Bad input mixed into a clean stream (docs/method.md §8.4):
 // NaN-only, wrong array length, unknown joint, +-Inf, duplicate stamp,
 // out-of-order stamp, a stamp far back in time (dropped: reset_on_time_jump
 // is false), and bad road messages.

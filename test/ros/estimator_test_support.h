@@ -30,6 +30,7 @@
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/ros/message_conversion.h"
+#include "rostest_main.h"
 
 namespace pc_ekf::test {
 
@@ -265,18 +266,6 @@ inline void expectSameEstimate(const ParameterEstimate& msg, const std::vector<J
     EXPECT_NEAR(msg.stddev[i], ref[i].stddev, rel * std::abs(ref[i].stddev))
         << what << " stddev " << i;
   }
-}
-
-inline int runRostests(int argc, char** argv, const char* tester_name) {
-  testing::InitGoogleTest(&argc, argv);
-  ros::init(argc, argv, tester_name);
-  ros::NodeHandle nh;
-  ros::AsyncSpinner spinner(2);
-  spinner.start();
-  const int result = RUN_ALL_TESTS();
-  spinner.stop();
-  ros::shutdown();
-  return result;
 }
 
 }  // namespace pc_ekf::test

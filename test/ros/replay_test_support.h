@@ -5,6 +5,7 @@
 #pragma once
 
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -93,6 +94,17 @@ class ChildProcess {
   int status_ = -2;  // -2: running
   std::string out_file_, err_file_;
 };
+
+// synthesize_bag on config/<config_name> into `scratch`: the bag's path, or ""
+// after an ADD_FAILURE with the tool's stderr.
+inline std::string synthesizeBag(const ScratchDir& scratch, const std::string& config_name) {
+  const std::string bag = scratch.file(config_name + ".bag");
+  const RunResult r = run(scratch, PC_EKF_EXE_SYNTHESIZE_BAG,
+                          "--config " + quote(config(config_name)) + " --output " + quote(bag));
+  if (r.status == 0) return bag;
+  ADD_FAILURE() << "synthesize_bag --config " << config_name << ": " << r.err;
+  return "";
+}
 
 // Runs `until` through `poll` (ros::spinOnce) until it holds or `seconds` pass.
 inline bool spinUntil(double seconds, const std::function<void()>& poll,

@@ -3,7 +3,7 @@
 // (one-step + coherence filters, batch buffer, PDFs) the node drives, fed a
 // streamed truth simulation and its road at 1 kHz for --samples samples.
 // Prints RSS every --report samples; exit 1 when a sample is dropped or RSS
-// grows by more than --limit-mb after --warmup samples (issue 7, soak.sh).
+// grows by more than --limit-mb after --warmup samples (soak.sh).
 #include <Eigen/Dense>
 
 #include <chrono>

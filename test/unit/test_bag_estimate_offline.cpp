@@ -2,7 +2,7 @@
 // and the CLI's exit status 2 for unusable bags and bad synthesize_bag input.
 //
 // Tolerances. The bag carries the road as 1 kHz samples, linearly
-// interpolated (SPEC §1.5), instead of the config's analytic road:
+// interpolated (docs/method.md §1.5), instead of the config's analytic road:
 //  - speed bump (16 km/h): every ramp corner (0.225, 0.45, 0.675 s; tyre 2
 //    +0.135 s) is on the 1 ms grid, so the interpolant IS the analytic road and
 //    the integrator takes the same steps; only rounding differs. Measured: equal

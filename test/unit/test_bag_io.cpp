@@ -1,4 +1,4 @@
-// Bag layout of INTERFACE.md: synthesize_bag -> readBag round trip, topic
+// Bag layout of docs/method.md §8.2: synthesize_bag -> readBag round trip, topic
 // matching, merging, and clear errors for unusable bags.
 #include <gtest/gtest.h>
 #include <rosbag/bag.h>

@@ -1,5 +1,5 @@
-// Health checks (SPEC §3.6) and the forecast's handling of collocation
-// points outside the model's domain (SPEC §3.1), on the paper's appendix
+// Health checks (docs/method.md §5) and the forecast's handling of collocation
+// points outside the model's domain (docs/method.md §4.1), on the paper's appendix
 // model y' = a y to show the filters are model-agnostic.
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// The ensemble-space PC update against the state-space formulas (SPEC §3.3, §3.4).
+// The ensemble-space PC update against the state-space formulas (docs/method.md §4.3, §4.4).
 #include <gtest/gtest.h>
 
 #include <random>

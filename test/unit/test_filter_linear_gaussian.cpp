@@ -1,4 +1,4 @@
-// SPEC §5: on a linear-Gaussian problem the square-root one-step filter, the
+// docs/method.md §7: on a linear-Gaussian problem the square-root one-step filter, the
 // square-root whole-set update and square-root ES-MDA equal the textbook
 // Kalman filter; the paper rule keeps the Kalman mean update but its
 // covariance is (I-KH)P(I-KH)^T.

@@ -1,5 +1,5 @@
-// The paper's speed-bump cases (SPEC §4) judged against the exact posterior
-// (SPEC §3.5) and over many noise seeds. Seeds are fixed, not selected.
+// The paper's speed-bump cases (docs/method.md §6) judged against the exact posterior
+// (docs/method.md §4.6) and over many noise seeds. Seeds are fixed, not selected.
 #include <gtest/gtest.h>
 
 #include "pc_ekf/filter/reference_posterior.h"
@@ -78,7 +78,7 @@ TEST(PaperCaseB, DecreasingInflationScheduleRemovesEsMdaBias) {
   }
 }
 
-// Both approximate the same linear-update estimator (SPEC §3.5 note). The
+// Both approximate the same linear-update estimator (docs/method.md §4.6 note). The
 // square-root ensemble (same serial rule as the PC-EKF) isolates what the
 // observation perturbations add: measured on this case, the perturbed EnKF's
 // d_CG sits 0.27-0.33 of its std from the PC-EKF for every ensemble seed

@@ -1,4 +1,4 @@
-// Roll-plane dynamics (SPEC §1.4, §5): step-refinement convergence, equilibrium
+// Roll-plane dynamics (docs/method.md §1.4, §7): step-refinement convergence, equilibrium
 // at rest, batch independence, non-finite columns, cost.
 #include <gtest/gtest.h>
 #include <time.h>
@@ -58,7 +58,7 @@ TEST(RollPlaneDynamics, SpeedBumpConvergesWithFourthOrder) {
                              std::make_shared<SpeedBumpRoad>(SpeedBumpSettings()));
   Eigen::MatrixXd params(16, 3);
   params.col(0) = paramsAt(model, 0.0, 0.0);
-  params.col(1) = paramsAt(model, 0.2326, -0.3875);  // SPEC §1.6 truth
+  params.col(1) = paramsAt(model, 0.2326, -0.3875);  // docs/method.md §1.6 truth
   params.col(2) = paramsAt(model, 1.0, 1.0);
   const double steps[4] = {2e-3, 1e-3, 5e-4, 2.5e-4};
   Eigen::MatrixXd z[4];
@@ -87,7 +87,7 @@ TEST(RollPlaneDynamics, SpeedBumpConvergesWithFourthOrder) {
 
 // The fixed-step Dormand-Prince 5 (IntegrationMethod::kDormandPrince5): fifth
 // order under refinement, and at a 3 ms step as accurate as RK4 at 1 ms
-// (SPEC §5: below 1e-6 of each channel's range) with half the evaluations.
+// (docs/method.md §7: below 1e-6 of each channel's range) with half the evaluations.
 Eigen::MatrixXd sampledChannelsDp5(const RollPlaneModel& model, const Eigen::MatrixXd& params,
                                    double max_step) {
   const auto batch = model.prepare(params);

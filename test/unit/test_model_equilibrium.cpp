@@ -1,4 +1,4 @@
-// Static equilibrium (SPEC §1.3), parameter vector and admissibility checks.
+// Static equilibrium (docs/method.md §1.3), parameter vector and admissibility checks.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -12,7 +12,7 @@ namespace {
 
 constexpr double kDeg = 180.0 / 3.14159265358979323846;
 
-// SPEC §1.1: M = 200 (1 + 0.5 xi1), d_CG = 0.762 (1 + 0.25 xi2).
+// docs/method.md §1.1: M = 200 (1 + 0.5 xi1), d_CG = 0.762 (1 + 0.25 xi2).
 VehicleParameters at(double xi1, double xi2) {
   VehicleParameters p;
   p.added_mass = 200.0 * (1.0 + 0.5 * xi1);

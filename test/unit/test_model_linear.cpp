@@ -1,4 +1,4 @@
-// Linear variant (k3 = 0, linear damper, SPEC §1.2) against the matrix exponential of
+// Linear variant (k3 = 0, linear damper, docs/method.md §1.2) against the matrix exponential of
 // its linearisation, built by hand from paper eq. 40-43 (not from the model's rhs).
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-// Road inputs of SPEC §1.5: bump shape, kinks, sine, sampled series.
+// Road inputs of docs/method.md §1.5: bump shape, kinks, sine, sampled series.
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Multi-index total-degree basis (SPEC §2).
+// Multi-index total-degree basis (docs/method.md §3.3).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Collocation designs and the least-squares projection (SPEC §2).
+// Collocation designs and the least-squares projection (docs/method.md §3.4, §3.5).
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Univariate orthonormal families, Gauss rules and germ distributions (SPEC §2).
+// Univariate orthonormal families, Gauss rules and germ distributions (docs/method.md §3.1, §3.2).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -124,7 +124,7 @@ TEST(OrthonormalFamily, Jacobi11MatchesExplicitSumFormula) {
       EXPECT_NEAR(psi(n), p / std::sqrt(norm2), 1e-12) << "n=" << n << " x=" << x;
     }
   }
-  // The SPEC §2 example: psi_1 = sqrt(5) xi.
+  // The docs/method.md §3.2 example: psi_1 = sqrt(5) xi.
   EXPECT_NEAR(family.evaluate(0.3, 1)(1), std::sqrt(5.0) * 0.3, 1e-15);
 }
 
@@ -193,7 +193,7 @@ TEST(OrthonormalFamily, RecurrenceCoefficientsOfTheHeader) {
     EXPECT_NEAR(j.recurrenceB(n), n * (n + 2.0) / ((2 * n + 1.0) * (2 * n + 3.0)), 1e-15);
   }
   EXPECT_DOUBLE_EQ(j.recurrenceB(0), 1.0);
-  EXPECT_NEAR(j.recurrenceB(1), 0.2, 1e-15);  // E[xi^2] = 1/5 (SPEC §2)
+  EXPECT_NEAR(j.recurrenceB(1), 0.2, 1e-15);  // E[xi^2] = 1/5 (docs/method.md §3.2)
   // Beta(2,5) mean on [-1,1]: 2 * 2/7 - 1 = -3/7.
   EXPECT_NEAR(OrthonormalFamily(beta(2, 5)).recurrenceA(0), -3.0 / 7.0, 1e-15);
   // a + b = -1 (Beta(0.5, 0.5): Chebyshev first kind): b_1 = 1/2, b_n = 1/4.

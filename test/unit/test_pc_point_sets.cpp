@@ -1,4 +1,4 @@
-// Halton / Hammersley point sets and their map to the germs (SPEC §2).
+// Halton / Hammersley point sets and their map to the germs (docs/method.md §3.4).
 #include <gtest/gtest.h>
 
 #include <stdexcept>

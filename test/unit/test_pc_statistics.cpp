@@ -1,4 +1,4 @@
-// Moments and sampled PDFs of PC expansions (SPEC §2).
+// Moments and sampled PDFs of PC expansions (docs/method.md §3.6).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,7 +13,7 @@ const GermSpec kBeta22{GermFamily::kBeta, 2.0, 2.0};
 
 PolynomialBasis paperBasis() { return PolynomialBasis({kBeta22, kBeta22}, 4); }
 
-// M(xi) = 200 + 100 xi1 in the paper basis (SPEC §2).
+// M(xi) = 200 + 100 xi1 in the paper basis (docs/method.md §3.6).
 Eigen::VectorXd massCoefficients() {
   Eigen::VectorXd c = Eigen::VectorXd::Zero(15);
   c(0) = 200.0;

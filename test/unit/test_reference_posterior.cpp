@@ -1,4 +1,4 @@
-// Reference posterior (SPEC §3.5): synthetic likelihoods with independently
+// Reference posterior (docs/method.md §4.6): synthetic likelihoods with independently
 // known answers (closed forms, 1-D quadrature), then the speed-bump case.
 #include <gtest/gtest.h>
 
@@ -218,7 +218,7 @@ double normal(std::mt19937_64& rng) {
   return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * M_PI * u2);
 }
 
-// Synthetic data of SPEC §1.6: N samples over 3 s, 1 % relative noise.
+// Synthetic data of docs/method.md §1.6: N samples over 3 s, 1 % relative noise.
 VehicleCase makeCase(std::shared_ptr<const ContactRoad> road, int samples, std::uint64_t seed) {
   VehicleCase c;
   c.model = std::make_shared<RollPlaneModel>(VehicleParameters(), std::move(road));
@@ -239,7 +239,7 @@ VehicleCase makeCase(std::shared_ptr<const ContactRoad> road, int samples, std::
   return c;
 }
 
-// SPEC §1.6 case N = 10 on a 41 x 41 coarse grid (cached once), fine grids 33
+// docs/method.md §1.6 case N = 10 on a 41 x 41 coarse grid (cached once), fine grids 33
 // and 65, and the same without the cache; computed once for all tests.
 struct SpeedBumpRuns {
   static constexpr int kCoarse = 41;
@@ -293,7 +293,7 @@ TEST(SpeedBumpPosterior, MeanLiesWithinAFewStdOfTheTruth) {
   EXPECT_GT(r.modes[0].mass_fraction, 0.5);
   for (int i = 0; i < 2; ++i) {
     EXPECT_LT(std::abs(r.xi_mean[i] - b.bump.truth[i]), 4.0 * r.xi_stddev[i]) << i;
-    // 1 % noise on 40 values: narrow, yet far wider than round-off (SPEC §3.5).
+    // 1 % noise on 40 values: narrow, yet far wider than round-off (docs/method.md §4.6).
     EXPECT_GT(r.xi_stddev[i], 1e-5);
     EXPECT_LT(r.xi_stddev[i], 0.05);
     EXPECT_NEAR(histogramArea(r.marginals[i]), 1.0, 1e-12);
@@ -358,7 +358,7 @@ TEST(SpeedBumpPosterior, AgreesWithABruteForceAxisAlignedGrid) {
   }
 }
 
-// Full 101 x 101 grids on the paper's inputs (SPEC §4), for timing reports:
+// Full 101 x 101 grids on the paper's inputs (docs/method.md §6), for timing reports:
 // run with --gtest_also_run_disabled_tests.
 TEST(ReferencePosteriorReport, DISABLED_PaperInputs) {
   const auto bump = std::make_shared<SpeedBumpRoad>(SpeedBumpSettings());

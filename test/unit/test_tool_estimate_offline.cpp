@@ -1,4 +1,4 @@
-// estimate_offline end to end (INTERFACE.md contract): JSON on stdout, every
+// estimate_offline end to end (docs/method.md §8.3): JSON on stdout, every
 // method, CSV input with missing cells, exit 2 naming the line on bad input.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
