@@ -83,7 +83,10 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
   // Before any subscription: no callback may see the prior state.
-  if (!checkpoint_file_.empty()) resumeFromCheckpoint();
+  if (!checkpoint_file_.empty()) {
+    resumeFromCheckpoint();
+    checkpoint_writer_ = std::make_unique<BackgroundWriter>();
+  }
 
   const int queue = config_.node.queue_size;
   estimate_pub_ = nh_.advertise<ParameterEstimate>("parameter_estimate", queue);
@@ -112,21 +115,26 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
 }
 
 EstimatorRos::~EstimatorRos() {
-  if (checkpoint_file_.empty() || !run_) return;
-  try {
-    saveCheckpoint();
+  if (!checkpoint_writer_) return;
+  if (run_) saveCheckpoint();
+  checkpoint_writer_->flush();
+  const std::uint64_t failed = diagnostics_.upkeep().checkpoint_errors;
+  reportCheckpointWrites();
+  if (run_ && diagnostics_.upkeep().checkpoint_errors == failed) {
     ROS_INFO("%s: checkpoint %s written at sample %d (shutdown)", name_.c_str(),
              checkpoint_file_.c_str(), run_->samples());
-  } catch (const std::exception& e) {
-    ROS_ERROR("%s: %s", name_.c_str(), e.what());
   }
 }
 
 void EstimatorRos::startRun() {
   timeline_.reset();
   run_.reset();
-  // A restart must not resume the run that was just abandoned.
-  if (!checkpoint_file_.empty()) std::remove(checkpoint_file_.c_str());
+  // A restart must not resume the run that was just abandoned: no write of
+  // it may still be waiting or running when the file goes.
+  if (checkpoint_writer_) {
+    checkpoint_writer_->cancel();
+    std::remove(checkpoint_file_.c_str());
+  }
   updateRunState();
 }
 
@@ -171,18 +179,32 @@ void EstimatorRos::resumeFromCheckpoint() {
 }
 
 void EstimatorRos::saveCheckpoint() {
-  Checkpoint c;
+  CheckpointSnapshot snapshot;
+  Checkpoint& c = snapshot.checkpoint;
   c.config_hash = config_hash_;
   c.road_mode = timeline_.mode() == RoadMode::kTopic ? "topic" : "analytic";
   c.origin = checkpointStamp(timeline_.origin().value_or(ros::Time()));
   c.last_sample = checkpointStamp(last_processed_stamp_);
-  run_->saveTo(c);
+  run_->saveTo(snapshot);
   if (timeline_.mode() == RoadMode::kTopic) {
     c.road = timeline_.roadFrom(run_->oldestTime());
     if (const auto last = timeline_.lastRoadStamp()) c.road_last_stamp = checkpointStamp(*last);
   }
   c.counters = counterMap(diagnostics_.counters());
-  writeCheckpoint(c, checkpoint_file_);
+  checkpoint_writer_->submit(
+      [snapshot = std::move(snapshot), path = checkpoint_file_] { writeCheckpoint(snapshot, path); });
+}
+
+void EstimatorRos::reportCheckpointWrites() {
+  if (!checkpoint_writer_) return;
+  NodeUpkeep& upkeep = diagnostics_.upkeep();
+  for (const std::string& error : checkpoint_writer_->takeErrors()) {
+    ++upkeep.checkpoint_errors;
+    upkeep.last_checkpoint_error = error;
+    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s", name_.c_str(), error.c_str());
+  }
+  upkeep.checkpoints_written = checkpoint_writer_->written();
+  upkeep.checkpoints_superseded = checkpoint_writer_->superseded();
 }
 
 void EstimatorRos::rejectSample(const std::string& reason, const std::string& detail) {
@@ -278,6 +300,7 @@ void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
 
 void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
   updateRunState();
+  reportCheckpointWrites();
   diagnostics_.publish();
 }
 
@@ -333,12 +356,10 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   counters.non_finite_updates += e.non_finite + e.coherence_non_finite;
   counters.batch_not_kept += e.batch_full;
   last_processed_stamp_ = sample.stamp;
-  if (!checkpoint_file_.empty() && run_->samples() % checkpoint_every_ == 0) {
-    try {
-      saveCheckpoint();
-    } catch (const CheckpointError& err) {  // estimating goes on; only a restart would lose
-      ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s", name_.c_str(), err.what());
-    }
+  if (checkpoint_writer_ && run_->samples() % checkpoint_every_ == 0) {
+    // A failed write is logged (reportCheckpointWrites); estimating goes on.
+    reportCheckpointWrites();
+    saveCheckpoint();
   }
   if (e.non_finite) {
     ROS_ERROR_THROTTLE(kWarnPeriod, "%s: non-finite filter update at t = %.6f s (sample %u)",
