@@ -33,6 +33,7 @@ SYSTEM_KEYS = {
     "boost": ["/usr/include/boost/version.hpp"],
     "gtest": ["/usr/include/gtest/gtest.h", "/usr/src/googletest/CMakeLists.txt"],
     "benchmark": ["/usr/include/benchmark/benchmark.h"],
+    "nlohmann-json-dev": ["/usr/include/nlohmann/json.hpp"],
 }
 
 # Commands run by the scripts and the README that the word scan below does
