@@ -151,14 +151,19 @@ void EstimatorDiagnostics::reportUpkeep(diagnostic_updater::DiagnosticStatusWrap
   const bool new_errors = u.checkpoint_errors > reported_checkpoint_errors_;
   reported_checkpoint_errors_ = u.checkpoint_errors;
   if (new_errors) m << "; checkpoint write failed: " << u.last_checkpoint_error;
-  s.summary(new_errors ? DiagnosticStatus::ERROR : DiagnosticStatus::OK, m.str());
+  const auto level = new_errors ? DiagnosticStatus::ERROR
+                     : u.master_state != "connected" ? DiagnosticStatus::WARN
+                                                     : DiagnosticStatus::OK;
+  s.summary(level, m.str());
   s.add("checkpoints written", u.checkpoints_written);
   s.add("checkpoints superseded (latest wins)", u.checkpoints_superseded);
   s.add("checkpoint write errors", u.checkpoint_errors);
   s.add("last checkpoint error", u.last_checkpoint_error);
   s.add("master", u.master_state);
+  s.add("master pid", u.master_pid);
   s.add("master restarts (re-registered)", u.master_restarts);
   s.add("last re-registration (wall time)", u.master_last_change);
+  s.add("last re-registration", u.master_last_report);
 }
 
 }  // namespace pc_ekf

@@ -60,8 +60,10 @@ struct NodeUpkeep {
   std::uint64_t checkpoint_errors = 0;
   std::string last_checkpoint_error;
   std::uint64_t master_restarts = 0;  // new masters registered with
-  std::string master_state = "connected";
+  std::string master_state = "connected";  // or "unreachable"
+  int master_pid = 0;
   std::string master_last_change;  // wall time of the last re-registration, "" = none
+  std::string master_last_report;  // what it registered
 };
 
 class EstimatorDiagnostics {

@@ -14,6 +14,7 @@ namespace pc_ekf {
 namespace {
 
 constexpr double kWarnPeriod = 5.0;  // s between repeated warnings of one kind
+constexpr double kMasterCheckPeriod = 1.0;  // s between asking the master whether it knows us
 
 double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -108,6 +109,15 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   wait_timer_ = nh_.createWallTimer(ros::WallDuration(wait), &EstimatorRos::onWaitTimer, this);
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_.period()),
                                            &EstimatorRos::onDiagnosticsTimer, this);
+  // This node's services, roscpp's logger services and (in a nodelet
+  // manager) the manager's: whichever exist are registered again after a
+  // master restart.
+  const std::string node = ros::this_node::getName();
+  master_watch_ = std::make_unique<MasterWatch>(
+      std::vector<std::string>{reset_srv_.getService(), batch_srv_.getService(),
+                               node + "/get_loggers", node + "/set_logger_level",
+                               node + "/load_nodelet", node + "/unload_nodelet", node + "/list"},
+      kMasterCheckPeriod);
   ROS_INFO("%s: estimating from %s (road %s, update %s); config %s", name_.c_str(),
            nh_.resolveName("suspension/joint_states").c_str(),
            toString(config_.road.source).c_str(), toString(config_.update).c_str(),
@@ -301,6 +311,13 @@ void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
 void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
   updateRunState();
   reportCheckpointWrites();
+  const MasterStatus master = master_watch_->status();
+  NodeUpkeep& upkeep = diagnostics_.upkeep();
+  upkeep.master_state = master.reachable ? "connected" : "unreachable";
+  upkeep.master_pid = master.pid;
+  upkeep.master_restarts = master.restarts;
+  upkeep.master_last_change = master.last_change;
+  upkeep.master_last_report = master.last_report;
   diagnostics_.publish();
 }
 

@@ -22,6 +22,7 @@
 #include "pc_ekf/ros/estimator_diagnostics.h"
 #include "pc_ekf/ros/estimator_run.h"
 #include "pc_ekf/ros/estimator_timeline.h"
+#include "pc_ekf/ros/master_watch.h"
 #include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
@@ -83,6 +84,8 @@ class EstimatorRos {
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;
   ros::ServiceServer reset_srv_, batch_srv_;
   ros::WallTimer wait_timer_, diagnostics_timer_;
+  // Registers the node again with a restarted master (own thread).
+  std::unique_ptr<MasterWatch> master_watch_;
 };
 
 }  // namespace pc_ekf
