@@ -26,7 +26,8 @@ namespace pc_ekf::bench {
 namespace {
 
 constexpr int kKept = 100000;  // batch samples in every checkpoint
-constexpr int kPaced = 3000;   // samples run at 1 kHz after the record is full
+constexpr int kPaced = 2000;   // samples per pass, run at 1 kHz after the record is full
+constexpr int kPasses = 3;     // the figures are of the best pass (see report())
 constexpr int kEvery = 100;    // ~checkpoint_every
 
 // One run with 10^5 kept samples: built once, then each benchmark runs
@@ -42,7 +43,7 @@ struct Fixture {
 
   Fixture() {
     config = loadConfigFile(configPath());
-    config.sampling.samples = kKept + 4 * kPaced;  // 1 kHz: the duration follows
+    config.sampling.samples = kKept + (2 * kPasses + 1) * kPaced;  // 1 kHz: the duration follows
     config.sampling.duration = 0.001 * config.sampling.samples;
     config.node.max_batch_samples = kKept;
     const Scenario s = makeScenario(config);
@@ -99,13 +100,26 @@ void paced(Fixture& f, Timings& t, Checkpoint&& checkpoint) {
   }
 }
 
-void report(benchmark::State& state, const Timings& t) {
+// Other processes on the machine only ever delay a sample: the figures are
+// those of the pass with the smallest largest delay (bench.sh's best-of
+// rule); the worst pass's largest delay is reported beside them.
+void report(benchmark::State& state, const std::vector<Timings>& passes) {
+  const auto worst_delay = [](const Timings& t) { return quantile(t.delay, 1.0); };
+  const Timings* best = &passes.front();
+  double worst_pass = 0.0;
+  for (const Timings& t : passes) {
+    if (worst_delay(t) < worst_delay(*best)) best = &t;
+    worst_pass = std::max(worst_pass, worst_delay(t));
+  }
+  const Timings& t = *best;
   state.counters["callback_max_ms"] = 1e3 * quantile(t.callback, 1.0);
   state.counters["callback_p99_ms"] = 1e3 * quantile(t.callback, 0.99);
   state.counters["callback_median_ms"] = 1e3 * quantile(t.callback, 0.5);
   state.counters["delay_max_ms"] = 1e3 * quantile(t.delay, 1.0);
   state.counters["delay_p99_ms"] = 1e3 * quantile(t.delay, 0.99);
+  state.counters["delay_max_worst_pass_ms"] = 1e3 * worst_pass;
   state.counters["write_max_ms"] = 1e3 * t.write_max.load();
+  state.counters["passes"] = static_cast<double>(passes.size());
   state.counters["kept_samples"] = static_cast<double>(fixture().run->batchSamples());
 }
 
@@ -118,18 +132,20 @@ void timedWrite(const CheckpointSnapshot& s, const std::string& path, Timings& t
 
 void BM_CallbackWhileCheckpointWritten(benchmark::State& state) {
   Fixture& f = fixture();
-  Timings t;
+  std::vector<Timings> passes(kPasses);
   double written = 0, superseded = 0;
   for (auto _ : state) {
-    BackgroundWriter writer;
-    paced(f, t, [&] {
-      writer.submit([s = f.snapshot(), &f, &t] { timedWrite(s, f.path, t); });
-    });
-    writer.flush();
-    written = static_cast<double>(writer.written());
-    superseded = static_cast<double>(writer.superseded());
+    for (Timings& t : passes) {
+      BackgroundWriter writer;
+      paced(f, t, [&] {
+        writer.submit([s = f.snapshot(), &f, &t] { timedWrite(s, f.path, t); });
+      });
+      writer.flush();
+      written += static_cast<double>(writer.written());
+      superseded += static_cast<double>(writer.superseded());
+    }
   }
-  report(state, t);
+  report(state, passes);
   state.counters["checkpoints_written"] = written;
   state.counters["checkpoints_superseded"] = superseded;
 }
@@ -139,17 +155,20 @@ BENCHMARK(BM_CallbackWhileCheckpointWritten)->Iterations(1)->UseRealTime()->Unit
 // alone delays a sample by (the floor of the figures above).
 void BM_CallbackWithoutCheckpoint(benchmark::State& state) {
   Fixture& f = fixture();
-  Timings t;
-  for (auto _ : state) paced(f, t, [] {});
-  report(state, t);
+  std::vector<Timings> passes(kPasses);
+  for (auto _ : state) {
+    for (Timings& t : passes) paced(f, t, [] {});
+  }
+  report(state, passes);
 }
 BENCHMARK(BM_CallbackWithoutCheckpoint)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
 
+// One pass: every write costs a few hundred ms of delay.
 void BM_CheckpointInCallback(benchmark::State& state) {
   Fixture& f = fixture();
-  Timings t;
-  for (auto _ : state) paced(f, t, [&] { timedWrite(f.snapshot(), f.path, t); });
-  report(state, t);
+  std::vector<Timings> passes(1);
+  for (auto _ : state) paced(f, passes[0], [&] { timedWrite(f.snapshot(), f.path, passes[0]); });
+  report(state, passes);
 }
 BENCHMARK(BM_CheckpointInCallback)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
 
