@@ -113,6 +113,7 @@ details = {
     "node": node,
     "checkpoint": {k: {c: b.get(c) for c in ("callback_max_ms", "callback_p99_ms",
                                              "callback_median_ms", "delay_max_ms", "delay_p99_ms",
+                                             "delay_max_worst_pass_ms", "passes",
                                              "write_max_ms", "kept_samples", "checkpoints_written",
                                              "checkpoints_superseded", "real_time")}
                    for k, b in checkpoint.items()},
