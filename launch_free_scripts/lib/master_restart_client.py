@@ -16,18 +16,10 @@ import threading
 import time
 
 import rospy
+from collect_estimates import wait_until  # beside this script
 from diagnostic_msgs.msg import DiagnosticArray
 from pc_ekf.msg import ParameterEstimate
 from sensor_msgs.msg import JointState
-
-
-def wait_until(condition, timeout):
-    deadline = time.monotonic() + timeout
-    while not condition():
-        if rospy.is_shutdown() or time.monotonic() > deadline:
-            return False
-        time.sleep(0.005)
-    return True
 
 
 def main():
