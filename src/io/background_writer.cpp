@@ -1,5 +1,7 @@
 #include "pc_ekf/io/background_writer.h"
 
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -61,10 +63,14 @@ std::uint64_t BackgroundWriter::superseded() const {
 }
 
 void BackgroundWriter::loop() {
-  // Lowest priority for this thread only (Linux: nice is per thread): on a
-  // busy machine the writes yield the CPU to the sample callbacks. Best
-  // effort; a failure leaves the default priority.
-  (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 19);
+  // Lowest priority for this thread only: SCHED_IDLE (any other thread that
+  // wakes up preempts it at once) or, where refused, nice 19 (nice is per
+  // thread on Linux). On a busy machine the writes yield the CPU to the
+  // sample callbacks. Best effort; a failure leaves the default priority.
+  sched_param idle{};
+  if (::pthread_setschedparam(::pthread_self(), SCHED_IDLE, &idle) != 0) {
+    (void)::setpriority(PRIO_PROCESS, static_cast<id_t>(::syscall(SYS_gettid)), 19);
+  }
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     wake_.wait(lock, [this] { return stop_ || pending_; });

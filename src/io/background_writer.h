@@ -2,8 +2,8 @@
 // callback) only hands over a job. Latest wins: a job submitted while an
 // earlier one is still waiting replaces it (only the newest state is worth
 // writing); a job already running finishes. The thread runs at the lowest
-// priority (nice 19). Errors are kept for the caller to report on its own
-// thread.
+// priority (SCHED_IDLE, else nice 19). Errors are kept for the caller to
+// report on its own thread.
 #pragma once
 
 #include <condition_variable>
