@@ -29,7 +29,8 @@ started=$(date +%s)
 
 pc_ekf_ensure_packages || exit 1
 mkdir -p "$PC_EKF_ROOT/.build"
-benches=(bench_one_step bench_integrator bench_scaling bench_propagation bench_enkf bench_posterior)
+benches=(bench_one_step bench_integrator bench_scaling bench_propagation bench_enkf bench_posterior
+         bench_checkpoint bench_odeint)
 node_targets=(estimator_node replay_node synthesize_bag bench_node_throughput)
 pc_ekf_log "building in Release (log: .build/bench_build.log)"
 if ! PC_EKF_BUILD_TYPE=Release pc_ekf_catkin_make "${benches[@]}" \
@@ -65,6 +66,8 @@ if [ "$quick" = 1 ]; then
   run_bench bench_integrator --benchmark_filter='StepAccuracy/(1000|3000)/'
   run_bench bench_scaling --benchmark_filter='UpdateScaling/(2|4)/(2|4|8)|WholeSet/(100|10000)$'
   run_bench bench_propagation --benchmark_filter='PcVersus'
+  run_bench bench_checkpoint --benchmark_filter='WhileCheckpointWritten|WithoutCheckpoint|Snapshot'
+  run_bench bench_odeint
 else
   run_bench bench_one_step
   run_bench bench_integrator
@@ -72,6 +75,8 @@ else
   run_bench bench_propagation
   run_bench bench_enkf
   run_bench bench_posterior
+  run_bench bench_checkpoint
+  run_bench bench_odeint
 fi
 pc_ekf_log "running the node end to end"
 bash "$here/lib/bench_node.sh" "$bin" "$out/node" || pc_ekf_log "node benchmark failed"

@@ -69,6 +69,9 @@ fi
 # The install space: headers, libraries and tools usable by another package.
 [ "$sanitize" -eq 0 ] && pc_ekf_install_check "$results"
 [ "$sanitize" -eq 0 ] && pc_ekf_lint_check "$results"
+# The node survives a restart of the ROS master (a script: rostest owns its master).
+[ "$sanitize" -eq 0 ] && { bash "$here/lib/master_restart_test.sh" "$results" ||
+                             pc_ekf_log "master restart test FAILED (log: .build/master_restart/)"; }
 
 # The install list covers every package used (a fresh machine has only it).
 mkdir -p "$results"

@@ -35,6 +35,7 @@ SYSTEM_KEYS = {
     "benchmark": ["/usr/include/benchmark/benchmark.h"],
     "python3-matplotlib": ["/usr/lib/python3/dist-packages/matplotlib/__init__.py"],
     "python3-tk": ["/usr/lib/python3.11/tkinter/__init__.py"],
+    "nlohmann-json-dev": ["/usr/include/nlohmann/json.hpp"],
 }
 
 # Commands run by the scripts and the README that the word scan below does

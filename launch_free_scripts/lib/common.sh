@@ -34,7 +34,9 @@ PC_EKF_APT_PACKAGES=(
   python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev libnodeletlib-tools colcon
   python3-colcon-ros python3-matplotlib python3-numpy python3-rospy python3-std-srvs
   python3-tk                     # plot_estimates' live window (matplotlib's TkAgg)
+  python3-sensor-msgs python3-diagnostic-msgs  # master_restart_client.py
   catkin-lint                    # test.sh: the package is catkin_lint clean
+  nlohmann-json3-dev             # estimate_offline's JSON output
   clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
 )
 

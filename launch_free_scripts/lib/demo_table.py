@@ -5,7 +5,7 @@ usage: demo_table.py N NODE.json OFFLINE_ONE_STEP_DIR OFFLINE_ES_MDA.json [REPLA
 NODE.json is collect_estimates.py's output (the node's last parameter_estimate,
 its parameter_estimate/batch and the bag's ground_truth); the OFFLINE ones are
 estimate_offline --bag on the same bag: the one-step run's --out directory
-(its samples.csv has 15 significant digits; the JSON only 12) and the es_mda
+(its samples.csv, like the JSON, has round-trip doubles) and the es_mda
 run's JSON. Exit 1 when the run was not lossless.
 """
 import csv
@@ -55,6 +55,10 @@ def max_relative_difference(node, offline):
     return worst
 
 
+def difference(d):
+    return "0 (identical)" if d == 0 else f"{d:.1e}"
+
+
 def health(result):
     if result is None:
         return "n/a"
@@ -91,10 +95,11 @@ def main():
     if node.get("batch_reply") and not node["batch_reply"].get("success"):
         print(f"  ~estimate_batch: {node['batch_reply'].get('message')}")
     diffs = [max_relative_difference(node.get("last"), offline_one_step)]
-    line = f"  vs estimate_offline --bag (same bag): one-step max rel. diff {diffs[0]:.1e}"
+    line = f"  vs estimate_offline --bag (same bag): one-step max rel. diff {difference(diffs[0])}"
     if node.get("batch"):
         diffs.append(max_relative_difference(node["batch"], offline_batch))
-        line += f", es_mda {diffs[1]:.1e} (it prints 12 digits)"
+        line += f", es_mda {difference(diffs[1])}"
+    line += " (both print round-trip doubles)"
     print(line)
     lossless = node["received"] == n and node["distinct_stamps"] == n
     if not lossless:

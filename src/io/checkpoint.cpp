@@ -342,6 +342,12 @@ void writeCheckpoint(const Checkpoint& c, const std::string& path) {
   syncDirectory(path);
 }
 
+void writeCheckpoint(const CheckpointSnapshot& s, const std::string& path) {
+  Checkpoint c = s.checkpoint;
+  c.batch_samples = s.batch.series();
+  writeCheckpoint(c, path);
+}
+
 Checkpoint readCheckpoint(const std::string& path) {
   CheckpointText f(path);
   Checkpoint c;

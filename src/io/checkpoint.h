@@ -13,6 +13,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "pc_ekf/filter/kept_samples.h"
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/io/measurement_csv.h"
 
@@ -69,6 +70,16 @@ std::string canonicalConfigText(const YAML::Node& config);
 
 // Throws CheckpointError when the file cannot be written or renamed.
 void writeCheckpoint(const Checkpoint& c, const std::string& path);
+
+// A checkpoint taken in a sample callback and written later on another
+// thread: everything but the batch samples, which stay in KeptSamples' shared
+// blocks (a copy of 10^5 samples would cost the callback milliseconds) and
+// are joined by writeCheckpoint on the writing thread.
+struct CheckpointSnapshot {
+  Checkpoint checkpoint;  // batch_samples empty
+  KeptSamples batch;
+};
+void writeCheckpoint(const CheckpointSnapshot& s, const std::string& path);
 
 // Strict: every key present once, matrices of the stated size, numbers
 // finite. Throws CheckpointError naming the file and the key.

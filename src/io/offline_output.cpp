@@ -1,101 +1,89 @@
-// JSON and CSV output of estimate_offline (docs/method.md §8.3).
-#include <sys/stat.h>
-
-#include <cerrno>
-#include <cmath>
-#include <cstring>
+// JSON and CSV output of estimate_offline (docs/method.md §8.3). The JSON
+// comes from nlohmann::json: numbers in their shortest round-trip form (a
+// reader gets the same double), strings escaped as JSON requires, non-finite
+// numbers as null.
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
-#include <sstream>
+#include <limits>
+#include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <system_error>
 
 #include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
 namespace {
 
-std::string number(double v) {
-  if (!std::isfinite(v)) return "null";
-  std::ostringstream o;
-  o << std::setprecision(12) << v;
-  return o.str();
-}
+// Keys in the order of the documented output.
+using Json = nlohmann::ordered_json;
 
-std::string quoted(const std::string& s) {
-  std::string out = "\"";
-  for (char ch : s) {
-    if (ch == '"' || ch == '\\') out += '\\';
-    if (static_cast<unsigned char>(ch) < 0x20) {
-      out += ' ';
-      continue;
-    }
-    out += ch;
-  }
-  return out + "\"";
-}
-
-std::string numberList(const Eigen::VectorXd& v) {
-  std::string s = "[";
-  for (Eigen::Index i = 0; i < v.size(); ++i) s += (i ? ", " : "") + number(v[i]);
-  return s + "]";
+Json numberList(const Eigen::VectorXd& v) {
+  Json list = Json::array();
+  for (Eigen::Index i = 0; i < v.size(); ++i) list.push_back(v[i]);
+  return list;
 }
 
 void makeDirectory(const std::string& dir) {
-  std::string path;
-  std::istringstream parts(dir);
-  std::string part;
-  if (!dir.empty() && dir[0] == '/') path = "/";
-  while (std::getline(parts, part, '/')) {
-    if (part.empty()) continue;
-    path += part + "/";
-    if (mkdir(path.c_str(), 0755) != 0 && errno != EEXIST) {
-      throw std::runtime_error(dir + ": cannot create the output directory (" +
-                               std::strerror(errno) + ")");
-    }
+  std::error_code error;
+  std::filesystem::create_directories(dir, error);
+  if (error) {
+    throw std::runtime_error(dir + ": cannot create the output directory (" + error.message() +
+                             ")");
   }
 }
 
+// CSV numbers with max_digits10 significant digits: they read back as the
+// same doubles, like the JSON's.
 std::ofstream openOutput(const std::string& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error(path + ": cannot write");
-  out << std::setprecision(15);
+  out << std::setprecision(std::numeric_limits<double>::max_digits10);
   return out;
 }
 
 }  // namespace
 
 std::string toJson(const OfflineResult& r) {
-  std::ostringstream o;
-  o << "{\"method\": " << quoted(r.method) << ", \"update\": " << quoted(r.update)
-    << ", \"samples\": " << r.samples << ", \"healthy\": " << (r.healthy ? "true" : "false")
-    << ",\n \"warnings\": [";
-  for (std::size_t i = 0; i < r.warnings.size(); ++i) o << (i ? ", " : "") << quoted(r.warnings[i]);
-  o << "],\n \"parameters\": [";
-  for (std::size_t i = 0; i < r.parameters.size(); ++i) {
-    const ParameterSummary& p = r.parameters[i];
-    o << (i ? ",\n   " : "\n   ") << "{\"name\": " << quoted(p.name) << ", \"mean\": " << number(p.mean)
-      << ", \"stddev\": " << number(p.stddev) << ", \"xi_mean\": " << number(p.xi_mean)
-      << ", \"xi_stddev\": " << number(p.xi_stddev) << "}";
+  Json j;
+  j["method"] = r.method;
+  j["update"] = r.update;
+  j["samples"] = r.samples;
+  j["healthy"] = r.healthy;
+  j["warnings"] = r.warnings;
+  j["parameters"] = Json::array();
+  for (const ParameterSummary& p : r.parameters) {
+    j["parameters"].push_back({{"name", p.name},
+                               {"mean", p.mean},
+                               {"stddev", p.stddev},
+                               {"xi_mean", p.xi_mean},
+                               {"xi_stddev", p.xi_stddev}});
   }
-  o << "],\n \"coherence\": {\"available\": " << (r.coherence.available ? "true" : "false")
-    << ", \"decimation\": " << r.coherence.decimation
-    << ", \"disagreement\": " << numberList(r.coherence.disagreement)
-    << ", \"threshold\": " << number(r.coherence.threshold)
-    << ", \"flagged\": " << (r.coherence.flagged ? "true" : "false") << "},\n"
-    << " \"nis_window_violations\": " << r.nis_window_violations
-    << ", \"band_nested_fraction\": " << number(r.band_nested_fraction)
-    << ", \"integrations\": " << r.integrations << ", \"wall_time_s\": " << number(r.wall_seconds)
-    << ",\n \"predictive_check\": {\"available\": " << (r.predictive.available ? "true" : "false")
-    << ", \"statistic\": " << number(r.predictive.statistic) << ", \"dof\": " << r.predictive.dof
-    << ", \"lower\": " << number(r.predictive.lower) << ", \"upper\": " << number(r.predictive.upper)
-    << ", \"outside\": " << (r.predictive.outside ? "true" : "false") << "},\n"
-    << " \"rejected_samples\": " << r.rejected_samples << ", \"damped_updates\": " << r.damped_updates
-    << ", \"reopened\": " << r.reopened;
+  j["coherence"] = {{"available", r.coherence.available},
+                    {"decimation", r.coherence.decimation},
+                    {"disagreement", numberList(r.coherence.disagreement)},
+                    {"threshold", r.coherence.threshold},
+                    {"flagged", r.coherence.flagged}};
+  j["nis_window_violations"] = r.nis_window_violations;
+  j["band_nested_fraction"] = r.band_nested_fraction;
+  j["integrations"] = r.integrations;
+  j["wall_time_s"] = r.wall_seconds;
+  j["predictive_check"] = {{"available", r.predictive.available},
+                           {"statistic", r.predictive.statistic},
+                           {"dof", r.predictive.dof},
+                           {"lower", r.predictive.lower},
+                           {"upper", r.predictive.upper},
+                           {"outside", r.predictive.outside}};
+  j["rejected_samples"] = r.rejected_samples;
+  j["damped_updates"] = r.damped_updates;
+  j["reopened"] = r.reopened;
   if (r.method == "grid") {
-    o << ", \"modes\": " << r.modes << ", \"border_mass\": " << number(r.border_mass);
+    j["modes"] = r.modes;
+    j["border_mass"] = r.border_mass;
   }
-  o << "}\n";
-  return o.str();
+  // Bytes that are not UTF-8 (a warning quoting a file) become U+FFFD
+  // instead of an exception.
+  return j.dump(1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {

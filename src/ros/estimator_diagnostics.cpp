@@ -33,6 +33,7 @@ EstimatorDiagnostics::EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle p
   updater_.add("configuration", this, &EstimatorDiagnostics::reportConfiguration);
   updater_.add("input", this, &EstimatorDiagnostics::reportInput);
   updater_.add("filter health", this, &EstimatorDiagnostics::reportHealth);
+  updater_.add("checkpoints and master", this, &EstimatorDiagnostics::reportUpkeep);
 }
 
 void EstimatorDiagnostics::setRunState(const std::string& road_mode, const std::string& origin,
@@ -139,6 +140,30 @@ void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrap
   s.add("band nested (informational)", h.band_nested);
   s.add("coherence flagged", u.coherence_flagged);
   s.add("healthy", u.healthy);
+}
+
+void EstimatorDiagnostics::reportUpkeep(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  const NodeUpkeep& u = upkeep_;
+  std::ostringstream m;
+  m << u.checkpoints_written << " checkpoints written";
+  if (u.master_restarts > 0) m << "; re-registered with " << u.master_restarts << " new master(s)";
+  if (u.master_state != "connected") m << "; master " << u.master_state;
+  const bool new_errors = u.checkpoint_errors > reported_checkpoint_errors_;
+  reported_checkpoint_errors_ = u.checkpoint_errors;
+  if (new_errors) m << "; checkpoint write failed: " << u.last_checkpoint_error;
+  const auto level = new_errors ? DiagnosticStatus::ERROR
+                     : u.master_state != "connected" ? DiagnosticStatus::WARN
+                                                     : DiagnosticStatus::OK;
+  s.summary(level, m.str());
+  s.add("checkpoints written", u.checkpoints_written);
+  s.add("checkpoints superseded (latest wins)", u.checkpoints_superseded);
+  s.add("checkpoint write errors", u.checkpoint_errors);
+  s.add("last checkpoint error", u.last_checkpoint_error);
+  s.add("master", u.master_state);
+  s.add("master pid", u.master_pid);
+  s.add("master restarts (re-registered)", u.master_restarts);
+  s.add("last re-registration (wall time)", u.master_last_change);
+  s.add("last re-registration", u.master_last_report);
 }
 
 }  // namespace pc_ekf

@@ -52,6 +52,20 @@ struct LastUpdate {
   std::vector<std::string> warnings;
 };
 
+// The node's own upkeep (not stored in checkpoints): background checkpoint
+// writes and re-registrations with a restarted ROS master.
+struct NodeUpkeep {
+  std::uint64_t checkpoints_written = 0;
+  std::uint64_t checkpoints_superseded = 0;  // replaced by a newer one before written
+  std::uint64_t checkpoint_errors = 0;
+  std::string last_checkpoint_error;
+  std::uint64_t master_restarts = 0;  // new masters registered with
+  std::string master_state = "connected";  // or "unreachable"
+  int master_pid = 0;
+  std::string master_last_change;  // wall time of the last re-registration, "" = none
+  std::string master_last_report;  // what it registered
+};
+
 class EstimatorDiagnostics {
  public:
   EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& node_name,
@@ -59,6 +73,7 @@ class EstimatorDiagnostics {
 
   EstimatorCounters& counters() { return counters_; }
   LastUpdate& last() { return last_; }
+  NodeUpkeep& upkeep() { return upkeep_; }
   // Run state shown with the input: origin, road mode, pending samples.
   // `origin`: the stamp of t = 0 as sec.nsec, "" while not set.
   void setRunState(const std::string& road_mode, const std::string& origin, std::size_t pending,
@@ -70,11 +85,14 @@ class EstimatorDiagnostics {
   void reportConfiguration(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportInput(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportHealth(diagnostic_updater::DiagnosticStatusWrapper& s);
+  void reportUpkeep(diagnostic_updater::DiagnosticStatusWrapper& s);
 
   diagnostic_updater::Updater updater_;
   EstimatorConfig config_;
   EstimatorCounters counters_;
   LastUpdate last_;
+  NodeUpkeep upkeep_;
+  std::uint64_t reported_checkpoint_errors_ = 0;
   // For rates and "new rejections since the last report".
   std::uint64_t reported_received_ = 0, reported_rejected_ = 0, reported_expired_ = 0;
   ros::WallTime reported_at_;

@@ -14,6 +14,7 @@ namespace pc_ekf {
 namespace {
 
 constexpr double kWarnPeriod = 5.0;  // s between repeated warnings of one kind
+constexpr double kMasterCheckPeriod = 1.0;  // s between asking the master whether it knows us
 
 double steadySeconds() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -83,7 +84,10 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
   // Before any subscription: no callback may see the prior state.
-  if (!checkpoint_file_.empty()) resumeFromCheckpoint();
+  if (!checkpoint_file_.empty()) {
+    resumeFromCheckpoint();
+    checkpoint_writer_ = std::make_unique<BackgroundWriter>();
+  }
 
   const int queue = config_.node.queue_size;
   estimate_pub_ = nh_.advertise<ParameterEstimate>("parameter_estimate", queue);
@@ -105,6 +109,15 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   wait_timer_ = nh_.createWallTimer(ros::WallDuration(wait), &EstimatorRos::onWaitTimer, this);
   diagnostics_timer_ = nh_.createWallTimer(ros::WallDuration(diagnostics_.period()),
                                            &EstimatorRos::onDiagnosticsTimer, this);
+  // This node's services, roscpp's logger services and (in a nodelet
+  // manager) the manager's: whichever exist are registered again after a
+  // master restart.
+  const std::string node = ros::this_node::getName();
+  master_watch_ = std::make_unique<MasterWatch>(
+      std::vector<std::string>{reset_srv_.getService(), batch_srv_.getService(),
+                               node + "/get_loggers", node + "/set_logger_level",
+                               node + "/load_nodelet", node + "/unload_nodelet", node + "/list"},
+      kMasterCheckPeriod);
   ROS_INFO("%s: estimating from %s (road %s, update %s); config %s", name_.c_str(),
            nh_.resolveName("suspension/joint_states").c_str(),
            toString(config_.road.source).c_str(), toString(config_.update).c_str(),
@@ -112,21 +125,26 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
 }
 
 EstimatorRos::~EstimatorRos() {
-  if (checkpoint_file_.empty() || !run_) return;
-  try {
-    saveCheckpoint();
+  if (!checkpoint_writer_) return;
+  if (run_) saveCheckpoint();
+  checkpoint_writer_->flush();
+  const std::uint64_t failed = diagnostics_.upkeep().checkpoint_errors;
+  reportCheckpointWrites();
+  if (run_ && diagnostics_.upkeep().checkpoint_errors == failed) {
     ROS_INFO("%s: checkpoint %s written at sample %d (shutdown)", name_.c_str(),
              checkpoint_file_.c_str(), run_->samples());
-  } catch (const std::exception& e) {
-    ROS_ERROR("%s: %s", name_.c_str(), e.what());
   }
 }
 
 void EstimatorRos::startRun() {
   timeline_.reset();
   run_.reset();
-  // A restart must not resume the run that was just abandoned.
-  if (!checkpoint_file_.empty()) std::remove(checkpoint_file_.c_str());
+  // A restart must not resume the run that was just abandoned: no write of
+  // it may still be waiting or running when the file goes.
+  if (checkpoint_writer_) {
+    checkpoint_writer_->cancel();
+    std::remove(checkpoint_file_.c_str());
+  }
   updateRunState();
 }
 
@@ -171,18 +189,32 @@ void EstimatorRos::resumeFromCheckpoint() {
 }
 
 void EstimatorRos::saveCheckpoint() {
-  Checkpoint c;
+  CheckpointSnapshot snapshot;
+  Checkpoint& c = snapshot.checkpoint;
   c.config_hash = config_hash_;
   c.road_mode = timeline_.mode() == RoadMode::kTopic ? "topic" : "analytic";
   c.origin = checkpointStamp(timeline_.origin().value_or(ros::Time()));
   c.last_sample = checkpointStamp(last_processed_stamp_);
-  run_->saveTo(c);
+  run_->saveTo(snapshot);
   if (timeline_.mode() == RoadMode::kTopic) {
     c.road = timeline_.roadFrom(run_->oldestTime());
     if (const auto last = timeline_.lastRoadStamp()) c.road_last_stamp = checkpointStamp(*last);
   }
   c.counters = counterMap(diagnostics_.counters());
-  writeCheckpoint(c, checkpoint_file_);
+  checkpoint_writer_->submit(
+      [snapshot = std::move(snapshot), path = checkpoint_file_] { writeCheckpoint(snapshot, path); });
+}
+
+void EstimatorRos::reportCheckpointWrites() {
+  if (!checkpoint_writer_) return;
+  NodeUpkeep& upkeep = diagnostics_.upkeep();
+  for (const std::string& error : checkpoint_writer_->takeErrors()) {
+    ++upkeep.checkpoint_errors;
+    upkeep.last_checkpoint_error = error;
+    ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s", name_.c_str(), error.c_str());
+  }
+  upkeep.checkpoints_written = checkpoint_writer_->written();
+  upkeep.checkpoints_superseded = checkpoint_writer_->superseded();
 }
 
 void EstimatorRos::rejectSample(const std::string& reason, const std::string& detail) {
@@ -278,6 +310,14 @@ void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
 
 void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
   updateRunState();
+  reportCheckpointWrites();
+  const MasterStatus master = master_watch_->status();
+  NodeUpkeep& upkeep = diagnostics_.upkeep();
+  upkeep.master_state = master.reachable ? "connected" : "unreachable";
+  upkeep.master_pid = master.pid;
+  upkeep.master_restarts = master.restarts;
+  upkeep.master_last_change = master.last_change;
+  upkeep.master_last_report = master.last_report;
   diagnostics_.publish();
 }
 
@@ -333,12 +373,10 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   counters.non_finite_updates += e.non_finite + e.coherence_non_finite;
   counters.batch_not_kept += e.batch_full;
   last_processed_stamp_ = sample.stamp;
-  if (!checkpoint_file_.empty() && run_->samples() % checkpoint_every_ == 0) {
-    try {
-      saveCheckpoint();
-    } catch (const CheckpointError& err) {  // estimating goes on; only a restart would lose
-      ROS_ERROR_THROTTLE(kWarnPeriod, "%s: %s", name_.c_str(), err.what());
-    }
+  if (checkpoint_writer_ && run_->samples() % checkpoint_every_ == 0) {
+    // A failed write is logged (reportCheckpointWrites); estimating goes on.
+    reportCheckpointWrites();
+    saveCheckpoint();
   }
   if (e.non_finite) {
     ROS_ERROR_THROTTLE(kWarnPeriod, "%s: non-finite filter update at t = %.6f s (sample %u)",

@@ -17,10 +17,12 @@
 #include <string>
 
 #include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/io/background_writer.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/ros/estimator_diagnostics.h"
 #include "pc_ekf/ros/estimator_run.h"
 #include "pc_ekf/ros/estimator_timeline.h"
+#include "pc_ekf/ros/master_watch.h"
 #include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
@@ -32,7 +34,8 @@ class EstimatorRos {
   // With ~checkpoint_file set and the file present, resumes from it; throws
   // CheckpointError when it is unreadable or from another configuration.
   EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name);
-  // Writes the checkpoint (when enabled) so that a restart continues the run.
+  // Writes the checkpoint (when enabled) so that a restart continues the run,
+  // and waits for the write.
   ~EstimatorRos();
 
  private:
@@ -54,7 +57,10 @@ class EstimatorRos {
   // The filters' propagator for the current road mode (topic: the timeline's road).
   std::shared_ptr<const PcPropagator> runPropagator() const;
   void resumeFromCheckpoint();
-  void saveCheckpoint();  // throws CheckpointError
+  // Hands the run's state to the writer thread (latest wins).
+  void saveCheckpoint();
+  // Logs the writer's failed writes (on this thread) and updates diagnostics.
+  void reportCheckpointWrites();
 
   std::string name_;
   std::uint64_t config_hash_ = 0;  // set while config_ is loaded (declared before it)
@@ -69,12 +75,17 @@ class EstimatorRos {
   EstimatorDiagnostics diagnostics_;
   std::string checkpoint_file_;  // "" = no checkpoints
   int checkpoint_every_ = 100;   // samples of the run between writes
+  // Checkpoint files are written on its thread: a write of 10^5 kept samples
+  // takes ~150 ms, far more than the sampling interval.
+  std::unique_ptr<BackgroundWriter> checkpoint_writer_;
   ros::Time last_processed_stamp_;
 
   ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_;
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;
   ros::ServiceServer reset_srv_, batch_srv_;
   ros::WallTimer wait_timer_, diagnostics_timer_;
+  // Registers the node again with a restarted master (own thread).
+  std::unique_ptr<MasterWatch> master_watch_;
 };
 
 }  // namespace pc_ekf

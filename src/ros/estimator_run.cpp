@@ -124,11 +124,12 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   return out;
 }
 
-void EstimatorRun::saveTo(Checkpoint& c) const {
+void EstimatorRun::saveTo(CheckpointSnapshot& s) const {
+  Checkpoint& c = s.checkpoint;
   c.full = {full_.state(), full_.time(), full_.samples()};
   c.decimated = {decimated_.state(), decimated_.time(), decimated_.samples()};
   c.coherence_disagreement = disagreement_;
-  c.batch_samples = batch_series_;
+  s.batch = batch_series_;
   c.batch_last_stamp = {batch_last_stamp_.sec, batch_last_stamp_.nsec};
 }
 
@@ -162,7 +163,7 @@ void EstimatorRun::resumeFrom(const Checkpoint& c, const std::string& path) {
   full_.restore(c.full.x, c.full.time, c.full.samples);
   decimated_.restore(c.decimated.x, c.decimated.time, c.decimated.samples);
   disagreement_ = c.coherence_disagreement;
-  batch_series_ = c.batch_samples;
+  batch_series_ = KeptSamples(c.batch_samples);
   batch_last_stamp_ = ros::Time(c.batch_last_stamp.sec, c.batch_last_stamp.nsec);
 }
 
@@ -191,7 +192,8 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   const std::vector<double> alphas = config_.node.batch_method == BatchMethod::kEsMda
                                          ? config_.es_mda.alphas
                                          : std::vector<double>{1.0};
-  const BatchResult b = batchUpdate(*propagator_, batch_series_, makeNoiseModel(config_),
+  const MeasurementSeries series = batch_series_.series();
+  const BatchResult b = batchUpdate(*propagator_, series, makeNoiseModel(config_),
                                     config_.update, alphas, config_.safeguards.support);
   const bool finite =
       b.finite && b.mean.allFinite() && b.stddev.allFinite() && b.coefficients.allFinite();
@@ -227,9 +229,9 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   if (config_.health.predictive_check) {
     const ParameterMapping& map = propagator_->mapping();
     const PredictiveCheck p = posteriorPredictiveCheck(
-        propagator_->model(), map.fullParameters(b.mean), batch_series_, makeNoiseModel(config_),
+        propagator_->model(), map.fullParameters(b.mean), series, makeNoiseModel(config_),
         config_.integration, map.count(), config_.health.nis_confidence);
-    setPredictiveCheck(msg, p, p.warning(propagator_->model().channelNames(), batch_series_));
+    setPredictiveCheck(msg, p, p.warning(propagator_->model().channelNames(), series));
     if (p.available) {
       s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper
         << "]" << (p.outside ? " FAILED" : "");

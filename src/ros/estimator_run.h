@@ -12,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "pc_ekf/filter/kept_samples.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/io/checkpoint.h"
 #include "pc_ekf/io/estimator_config.h"
@@ -59,7 +60,8 @@ class EstimatorRun {
 
   // The run's state into a checkpoint: both filters, the last coherence
   // comparison and the kept batch samples (the node adds origin and counters).
-  void saveTo(Checkpoint& c) const;
+  // Cheap enough for the sample callback: the samples are shared, not copied.
+  void saveTo(CheckpointSnapshot& s) const;
   // Continues a checkpointed run of the same configuration (the health
   // monitors' NIS windows restart). Throws CheckpointError naming `path`
   // when the state does not fit this run's filters.
@@ -74,7 +76,7 @@ class EstimatorRun {
   OneStepFilter full_;
   OneStepFilter decimated_;
   std::optional<Eigen::VectorXd> disagreement_;  // last multi-rate comparison
-  MeasurementSeries batch_series_;
+  KeptSamples batch_series_;
   ros::Time batch_last_stamp_;
 };
 

@@ -50,7 +50,7 @@ TEST_F(EstimatorBasic, OneEstimatePerSampleEqualToEstimateOffline) {
     EXPECT_EQ(msgs[k].update_rule, "square_root");
     EXPECT_TRUE(msgs[k].healthy) << k;
   }
-  // Same config, same data, same core: equal to the printed 12 digits.
+  // Same config, same data, same core: equal up to rounding (round-trip JSON).
   const auto offline = estimateOffline("--config " + configPath("speed_bump.yaml"));
   expectSameEstimate(msgs.back(), offline, 1e-9, "one_step");
   // Truth M = 223.26 kg, d_CG = 0.6882 m within 3 std.

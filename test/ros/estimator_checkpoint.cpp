@@ -186,6 +186,16 @@ void EstimatorCheckpoint::killAndResume(const std::string& ns, bool topic_road) 
     NodeProcess node(ns, params(file, kEvery, topic_road));
     ASSERT_TRUE(waitUntil([&] { return topics.connected(); }, 20.0)) << node.err();
     topics.feed(record_, 0, kKillAfter, topic_road);
+    // Checkpoints are written on a background thread: the one of sample 35
+    // lands shortly after that sample's estimate.
+    const auto written = [&] {
+      try {
+        return readCheckpoint(file).full.samples == static_cast<int>(kKillAfter / kEvery * kEvery);
+      } catch (const CheckpointError&) {
+        return false;  // not there yet
+      }
+    };
+    ASSERT_TRUE(waitUntil(written, 10.0)) << node.err();
     node.signal(SIGKILL);
     EXPECT_EQ(node.wait(10.0), -SIGKILL);
   }

@@ -19,10 +19,11 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <map>
 #include <mutex>
+#include <nlohmann/json.hpp>
 #include <optional>
-#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -239,14 +240,15 @@ struct JsonParameter {
   double mean = 0.0, stddev = 0.0;
 };
 
-// "parameters" entries of estimate_offline's JSON, in order.
+// "parameters" entries of estimate_offline's JSON, in order (null = NaN).
 inline std::vector<JsonParameter> parseParameters(const std::string& json) {
-  static const std::regex entry(
-      R"re("name": "[A-Za-z0-9_]+", "mean": ([-+0-9.eE]+|nan|inf), "stddev": ([-+0-9.eE]+|nan|inf))re");
+  const auto number = [](const nlohmann::json& v) {
+    return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
+  };
   std::vector<JsonParameter> out;
-  for (auto it = std::sregex_iterator(json.begin(), json.end(), entry);
-       it != std::sregex_iterator(); ++it) {
-    out.push_back({std::stod((*it)[1]), std::stod((*it)[2])});
+  const nlohmann::json doc = nlohmann::json::parse(json);  // outlives the loop
+  for (const auto& p : doc.at("parameters")) {
+    out.push_back({number(p.at("mean")), number(p.at("stddev"))});
   }
   return out;
 }

@@ -8,8 +8,9 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
-#include <regex>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -69,14 +70,15 @@ struct JsonParameter {
   double mean = 0.0, stddev = 0.0;
 };
 
-// "parameters" entries of estimate_offline's JSON, by name.
+// "parameters" entries of estimate_offline's JSON, by name (null = NaN).
 inline std::map<std::string, JsonParameter> parseParameters(const std::string& json) {
-  static const std::regex entry(
-      R"re("name": "([A-Za-z0-9_]+)", "mean": ([-+0-9.eE]+|nan|inf), "stddev": ([-+0-9.eE]+|nan|inf))re");
+  const auto number = [](const nlohmann::json& v) {
+    return v.is_null() ? std::numeric_limits<double>::quiet_NaN() : v.get<double>();
+  };
   std::map<std::string, JsonParameter> out;
-  for (auto it = std::sregex_iterator(json.begin(), json.end(), entry);
-       it != std::sregex_iterator(); ++it) {
-    out[(*it)[1]] = {std::stod((*it)[2]), std::stod((*it)[3])};
+  const nlohmann::json doc = nlohmann::json::parse(json);  // outlives the loop
+  for (const auto& p : doc.at("parameters")) {
+    out[p.at("name").get<std::string>()] = {number(p.at("mean")), number(p.at("stddev"))};
   }
   return out;
 }

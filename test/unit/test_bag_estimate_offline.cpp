@@ -5,8 +5,8 @@
 // interpolated (docs/method.md §1.5), instead of the config's analytic road:
 //  - speed bump (16 km/h): every ramp corner (0.225, 0.45, 0.675 s; tyre 2
 //    +0.135 s) is on the 1 ms grid, so the interpolant IS the analytic road and
-//    the integrator takes the same steps; only rounding differs. Measured: equal
-//    to the 12 digits printed. Asserted: 1e-9 relative.
+//    the integrator takes the same steps; only rounding differs. Asserted:
+//    1e-9 relative.
 //  - 1 Hz sine: chord error <= h^2/8 max|y''| = 2.5e-7 m (5e-6 of the
 //    amplitude) at h = 1 ms. Measured at 1 kHz: added_mass mean 223.10898 vs
 //    223.11007 (4.9e-6 relative, 7e-4 posterior std), d_CG 9e-7 relative,
