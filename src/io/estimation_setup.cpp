@@ -55,6 +55,22 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
   }
 }
 
+EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>& names,
+                              double range, double xi_truth) {
+  const std::shared_ptr<const MechanicalModel> model = makeModel(c, makeRoad(c));
+  for (const std::string& name : names) {
+    const int index = model->parameterIndex(name);
+    if (index < 0) throw ConfigError(c.source + ": no model parameter '" + name + "' to declare uncertain");
+    UncertainParameter u;
+    u.name = name;
+    u.nominal = model->nominalParameters()(index);
+    u.relative_range = range;
+    c.uncertain.push_back(u);
+    c.truth.xi.push_back(xi_truth);
+  }
+  return c;
+}
+
 NoiseModel makeNoiseModel(const EstimatorConfig& c) {
   NoiseModel n;
   n.rule = c.measurement.r_rule;
