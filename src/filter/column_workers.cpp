@@ -1,8 +1,33 @@
 #include "pc_ekf/filter/column_workers.h"
 
 #include <algorithm>
+#include <chrono>
 
 namespace pc_ekf {
+
+namespace {
+
+// Spin this long before sleeping: a forecast part lasts tens of
+// microseconds, a futex wake-up costs about as much. Longer spins only take
+// the core from other processes when the machine is busy.
+constexpr std::chrono::microseconds kSpin{30};
+
+// Spins until done() or kSpin has passed; true when done.
+template <typename Done>
+bool spinUntil(Done&& done) {
+  const auto deadline = std::chrono::steady_clock::now() + kSpin;
+  while (!done()) {
+    for (int i = 0; i < 32; ++i) {
+#if defined(__x86_64__) || defined(__i386__)
+      __builtin_ia32_pause();
+#endif
+    }
+    if (std::chrono::steady_clock::now() > deadline) return done();
+  }
+  return true;
+}
+
+}  // namespace
 
 int ColumnWorkers::defaultThreads() {
   return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
@@ -15,7 +40,7 @@ ColumnWorkers::ColumnWorkers(int threads) : threads_(threads <= 0 ? defaultThrea
 ColumnWorkers::~ColumnWorkers() {
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    stop_ = true;
+    stop_.store(true);
   }
   start_.notify_all();
   for (auto& w : workers_) w.join();
@@ -24,23 +49,29 @@ ColumnWorkers::~ColumnWorkers() {
 void ColumnWorkers::workerLoop(int index) {
   long seen = 0;
   while (true) {
-    std::unique_lock<std::mutex> lock(mutex_);
-    start_.wait(lock, [&] { return stop_ || generation_ != seen; });
-    if (stop_) return;
-    seen = generation_;
-    if (!bounds_) continue;  // a run this worker had no part in, already over
-    const std::vector<long>& bounds = *bounds_;
-    const auto& job = *job_;
-    lock.unlock();
-    if (index + 1 < static_cast<int>(bounds.size())) {
+    if (!spinUntil([&] {
+          return generation_.load(std::memory_order_acquire) != seen ||
+                 stop_.load(std::memory_order_relaxed);
+        })) {
+      std::unique_lock<std::mutex> lock(mutex_);
+      start_.wait(lock, [&] { return stop_.load() || generation_.load() != seen; });
+    }
+    if (stop_.load()) return;
+    seen = generation_.load(std::memory_order_acquire);
+    // Every worker takes part in every run (an empty part when there are
+    // fewer parts than threads), so none reads a finished run's job.
+    const long begin = begins_[index], end = ends_[index];
+    if (end > begin) {
       try {
-        job(index, bounds[index], bounds[index + 1]);
+        (*job_)(index, begin, end);
       } catch (...) {
         std::lock_guard<std::mutex> g(mutex_);
         if (!error_) error_ = std::current_exception();
       }
+    }
+    if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
       std::lock_guard<std::mutex> g(mutex_);
-      if (--pending_ == 0) done_.notify_one();
+      done_.notify_one();
     }
   }
 }
@@ -54,14 +85,19 @@ void ColumnWorkers::run(const std::vector<long>& bounds,
     return;
   }
   std::lock_guard<std::mutex> serial(run_mutex_);
-  const int helpers = std::min(parts - 1, static_cast<int>(workers_.size()));
+  const int helpers = static_cast<int>(workers_.size());
+  begins_.assign(helpers + 1, 0);
+  ends_.assign(helpers + 1, 0);
+  for (int i = 1; i <= helpers && i < parts; ++i) {
+    begins_[i] = bounds[i];
+    ends_[i] = bounds[i + 1];
+  }
+  job_ = &job;
+  error_ = nullptr;
+  pending_.store(helpers, std::memory_order_relaxed);
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    bounds_ = &bounds;
-    job_ = &job;
-    pending_ = helpers;
-    error_ = nullptr;
-    ++generation_;
+    generation_.fetch_add(1, std::memory_order_release);
   }
   start_.notify_all();
   std::exception_ptr mine;
@@ -72,11 +108,13 @@ void ColumnWorkers::run(const std::vector<long>& bounds,
   } catch (...) {
     mine = std::current_exception();
   }
-  std::unique_lock<std::mutex> lock(mutex_);
-  done_.wait(lock, [&] { return pending_ == 0; });
-  bounds_ = nullptr;
+  if (!spinUntil([&] { return pending_.load(std::memory_order_acquire) == 0; })) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    done_.wait(lock, [&] { return pending_.load() == 0; });
+  }
   job_ = nullptr;
   if (mine) std::rethrow_exception(mine);
+  std::lock_guard<std::mutex> lock(mutex_);
   if (error_) std::rethrow_exception(error_);
 }
 

@@ -3,6 +3,7 @@
 // too short to start threads for every call.
 #pragma once
 
+#include <atomic>
 #include <condition_variable>
 #include <functional>
 #include <mutex>
@@ -33,13 +34,14 @@ class ColumnWorkers {
 
   int threads_ = 1;
   std::mutex run_mutex_;  // one run() at a time
-  std::mutex mutex_;
+  std::mutex mutex_;      // sleeping and waking, error_
   std::condition_variable start_, done_;
-  const std::vector<long>* bounds_ = nullptr;
+  // Published by run() before generation_ is incremented (release/acquire).
+  std::vector<long> begins_, ends_;  // part of worker i (empty: none this run)
   const std::function<void(int, long, long)>* job_ = nullptr;
-  long generation_ = 0;
-  int pending_ = 0;
-  bool stop_ = false;
+  std::atomic<long> generation_{0};
+  std::atomic<int> pending_{0};
+  std::atomic<bool> stop_{false};
   std::exception_ptr error_;
   std::vector<std::thread> workers_;
 };
