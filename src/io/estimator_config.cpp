@@ -484,7 +484,7 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
                                                " (quadrature needs gauss or smolyak)");
   }
   if (c.collocation.sequence == PointSequence::kSmolyak &&
-      c.collocation.projection != ProjectionMethod::kRegression &&
+      c.collocation.projection == ProjectionMethod::kQuadrature &&
       c.collocation.designCount(c.pc_order) < c.pc_order) {
     col.fail("level", std::to_string(c.collocation.level),
              "at least pc.order = " + std::to_string(c.pc_order) +

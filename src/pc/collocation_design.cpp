@@ -75,7 +75,8 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
   }
   const bool quadrature_rule = sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
   if (projection == ProjectionMethod::kAuto) {
-    projection = quadrature_rule ? ProjectionMethod::kQuadrature : ProjectionMethod::kRegression;
+    projection = sequence == PointSequence::kGauss ? ProjectionMethod::kQuadrature
+                                                   : ProjectionMethod::kRegression;
   }
   if (projection == ProjectionMethod::kQuadrature && !quadrature_rule) {
     throw std::invalid_argument("collocation design: quadrature projection needs a quadrature rule "

@@ -65,8 +65,8 @@ BENCHMARK(BM_UpdateScaling)
 
 // One-step update (square root, dt = 0.03 s, the bump's first 0.6 s) with n
 // uncertain roll-plane parameters (bench_support.h), p = scalingOrder(n), on
-// `threads` threads. Design 0: Smolyak sparse grid of level p (quadrature
-// projection); 1: Q = 2S Halton points (least squares). Wall time per sample
+// `threads` threads. Design 0: Smolyak sparse grid of level p (least squares
+// on its nodes, the default projection); 1: Q = 2S Halton points. Wall time per sample
 // (the workers' time counts), best of the passes, median over the samples.
 void BM_ManyParameters(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));

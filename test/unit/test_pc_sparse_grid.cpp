@@ -107,22 +107,24 @@ TEST(SmolyakDesign, QuadratureAndRegressionRecoverPolynomialsOfTheOrder) {
     const Eigen::VectorXd values = design.designMatrix() * c;
     EXPECT_LT((design.project(values) - c).cwiseAbs().maxCoeff(), 1e-10) << toString(m);
   }
-  // auto = quadrature for a sparse grid.
+  // auto = least squares for a sparse grid, the quadrature for tensor Gauss.
   EXPECT_EQ(CollocationDesign(basis, PointSequence::kSmolyak, 3).projection(),
+            ProjectionMethod::kRegression);
+  EXPECT_EQ(CollocationDesign(basis, PointSequence::kGauss, 4).projection(),
             ProjectionMethod::kQuadrature);
 }
 
 TEST(SmolyakDesign, RefusesALevelTooLowForTheQuadratureProjection) {
   const PolynomialBasis basis({kBeta22, kBeta22}, 4);
   try {
-    CollocationDesign(basis, PointSequence::kSmolyak, 3);
+    CollocationDesign(basis, PointSequence::kSmolyak, 3, 1, 1e8, ProjectionMethod::kQuadrature);
     FAIL() << "level 3 < order 4 accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("level 3"), std::string::npos) << e.what();
   }
-  // Regression on the same nodes only needs Q >= S.
-  EXPECT_NO_THROW(CollocationDesign(basis, PointSequence::kSmolyak, 3, 1, 1e8,
-                                    ProjectionMethod::kRegression));
+  // Regression on the same nodes only needs Q >= S (29 >= 15, not 13).
+  EXPECT_NO_THROW(CollocationDesign(basis, PointSequence::kSmolyak, 3));
+  EXPECT_THROW(CollocationDesign(basis, PointSequence::kSmolyak, 2), std::invalid_argument);
   EXPECT_THROW(CollocationDesign(basis, PointSequence::kHalton, 30, 1, 1e8,
                                  ProjectionMethod::kQuadrature),
                std::invalid_argument);
