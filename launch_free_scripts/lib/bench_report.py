@@ -80,8 +80,10 @@ result = {
     "node_samples_per_s": node.get("node_samples_per_s"),
     "node_peak_rss_mb": node.get("node_peak_rss_mb"),
     "mc_propagation_sample_ratio_default": get(propagation, "BM_DesignDefault/iterations:1", "sample_ratio"),
-    "rtf_n4": get(scaling, "BM_ManyParameters/4/2/0/iterations:1", "real_time_factor"),
-    "rtf_n8": get(scaling, "BM_ManyParameters/8/2/0/iterations:1", "real_time_factor"),
+    # Q = 2S Halton, p = 2: the sparse grid of the same p has the larger moment
+    # error (many_parameters_accuracy), so the keys are the Halton design's.
+    "rtf_n4": get(scaling, "BM_ManyParameters/4/2/1/iterations:1", "real_time_factor"),
+    "rtf_n8": get(scaling, "BM_ManyParameters/8/2/1/iterations:1", "real_time_factor"),
     "forecast_thread_speedup": get(scaling, "BM_ForecastThreads/0/iterations:1", "speedup"),
 }
 
@@ -254,12 +256,15 @@ for b in details["many_parameters_accuracy"]:
         None if b["smolyak_error"] is None or b["halton_error"] is None
         else b["smolyak_error"] <= b["halton_error"])
 for b in details["many_parameters"]:
-    if b["smolyak"] and b["threads"] is not None:
-        row(f"n = {b['n']:.0f}, p = {b['p']:.0f}, S = {b['S']:.0f}, sparse grid Q = {b['Q']:.0f}, "
+    if b["threads"] is not None:
+        row(f"n = {b['n']:.0f}, p = {b['p']:.0f}, S = {b['S']:.0f}, "
+            f"{'sparse grid' if b['smolyak'] else 'Halton'} Q = {b['Q']:.0f}, "
             f"{b['threads']:.0f} thread(s): median update, real-time factor",
             f"{fmt(b['median_us'], ' us')}, {fmt(b['real_time_factor'], 'x')}", "", None)
-row("rtf_n4 (sparse grid, 2 threads)", fmt(result["rtf_n4"], "x"), ">= 500x", cmp(result["rtf_n4"], ">=", 500))
-row("rtf_n8 (sparse grid, 2 threads)", fmt(result["rtf_n8"], "x"), ">= 100x", cmp(result["rtf_n8"], ">=", 100))
+row("rtf_n4 (p = 2, Q = 2S = 30 Halton, 2 threads configured)", fmt(result["rtf_n4"], "x"), ">= 500x",
+    cmp(result["rtf_n4"], ">=", 500))
+row("rtf_n8 (p = 2, Q = 2S = 90 Halton, 2 threads)", fmt(result["rtf_n8"], "x"), ">= 100x",
+    cmp(result["rtf_n8"], ">=", 100))
 row("forecast speedup on 2 threads (n = 4, p = 4, Q = 140 Halton)", fmt(result["forecast_thread_speedup"], "x"),
     ">= 1.7x", cmp(result["forecast_thread_speedup"], ">=", 1.7))
 p = posterior.get(post, {})

@@ -27,6 +27,9 @@ bool spinUntil(Done&& done) {
   return true;
 }
 
+constexpr int kIndexBits = 20;
+constexpr long kIndexMask = (1L << kIndexBits) - 1;
+
 }  // namespace
 
 int ColumnWorkers::defaultThreads() {
@@ -34,7 +37,7 @@ int ColumnWorkers::defaultThreads() {
 }
 
 ColumnWorkers::ColumnWorkers(int threads) : threads_(threads <= 0 ? defaultThreads() : threads) {
-  for (int i = 1; i < threads_; ++i) workers_.emplace_back([this, i] { workerLoop(i); });
+  for (int i = 1; i < threads_; ++i) workers_.emplace_back([this] { workerLoop(); });
 }
 
 ColumnWorkers::~ColumnWorkers() {
@@ -46,7 +49,33 @@ ColumnWorkers::~ColumnWorkers() {
   for (auto& w : workers_) w.join();
 }
 
-void ColumnWorkers::workerLoop(int index) {
+bool ColumnWorkers::runClaimedParts(long generation) {
+  bool any = false;
+  while (true) {
+    // Claim the next part of this generation only (a compare-exchange, so a
+    // late worker never touches a later run's counter).
+    long c = next_.load(std::memory_order_acquire);
+    long part = 0;
+    do {
+      part = c & kIndexMask;
+      if ((c >> kIndexBits) != generation || part >= parts_) return any;
+    } while (!next_.compare_exchange_weak(c, c + 1, std::memory_order_acq_rel));
+    // The run cannot finish before this claimed part is done: its data is stable.
+    any = true;
+    try {
+      (*job_)(static_cast<int>(part), bounds_[part], bounds_[part + 1]);
+    } catch (...) {
+      std::lock_guard<std::mutex> g(mutex_);
+      if (!error_) error_ = std::current_exception();
+    }
+    if (done_parts_.fetch_add(1, std::memory_order_acq_rel) + 1 == parts_) {
+      std::lock_guard<std::mutex> g(mutex_);
+      done_.notify_one();
+    }
+  }
+}
+
+void ColumnWorkers::workerLoop() {
   long seen = 0;
   while (true) {
     if (!spinUntil([&] {
@@ -58,21 +87,7 @@ void ColumnWorkers::workerLoop(int index) {
     }
     if (stop_.load()) return;
     seen = generation_.load(std::memory_order_acquire);
-    // Every worker takes part in every run (an empty part when there are
-    // fewer parts than threads), so none reads a finished run's job.
-    const long begin = begins_[index], end = ends_[index];
-    if (end > begin) {
-      try {
-        (*job_)(index, begin, end);
-      } catch (...) {
-        std::lock_guard<std::mutex> g(mutex_);
-        if (!error_) error_ = std::current_exception();
-      }
-    }
-    if (pending_.fetch_sub(1, std::memory_order_acq_rel) == 1) {
-      std::lock_guard<std::mutex> g(mutex_);
-      done_.notify_one();
-    }
+    runClaimedParts(seen);
   }
 }
 
@@ -85,45 +100,35 @@ void ColumnWorkers::run(const std::vector<long>& bounds,
     return;
   }
   std::lock_guard<std::mutex> serial(run_mutex_);
-  const int helpers = static_cast<int>(workers_.size());
-  begins_.assign(helpers + 1, 0);
-  ends_.assign(helpers + 1, 0);
-  for (int i = 1; i <= helpers && i < parts; ++i) {
-    begins_[i] = bounds[i];
-    ends_[i] = bounds[i + 1];
-  }
+  // Parts are claimed by whoever is free: a worker the scheduler wakes late
+  // (a busy machine) leaves its parts to this thread instead of stalling it.
+  const long generation = generation_.load(std::memory_order_relaxed) + 1;
+  bounds_ = bounds;
   job_ = &job;
+  parts_ = parts;
   error_ = nullptr;
-  pending_.store(helpers, std::memory_order_relaxed);
+  done_parts_.store(0, std::memory_order_relaxed);
+  next_.store(generation << kIndexBits, std::memory_order_release);
   {
     std::lock_guard<std::mutex> lock(mutex_);
-    generation_.fetch_add(1, std::memory_order_release);
+    generation_.store(generation, std::memory_order_release);
   }
   start_.notify_all();
-  std::exception_ptr mine;
-  try {
-    job(0, bounds[0], bounds[1]);
-    // Parts beyond the pool (more parts than threads) run here too.
-    for (int i = helpers + 1; i < parts; ++i) job(i, bounds[i], bounds[i + 1]);
-  } catch (...) {
-    mine = std::current_exception();
-  }
-  if (!spinUntil([&] { return pending_.load(std::memory_order_acquire) == 0; })) {
+  runClaimedParts(generation);
+  if (!spinUntil([&] { return done_parts_.load(std::memory_order_acquire) == parts; })) {
     std::unique_lock<std::mutex> lock(mutex_);
-    done_.wait(lock, [&] { return pending_.load() == 0; });
+    done_.wait(lock, [&] { return done_parts_.load() == parts; });
   }
-  job_ = nullptr;
-  if (mine) std::rethrow_exception(mine);
   std::lock_guard<std::mutex> lock(mutex_);
   if (error_) std::rethrow_exception(error_);
 }
 
-std::vector<long> columnParts(long count, int threads, long min_columns, long align) {
+std::vector<long> columnParts(long count, int parts, long min_columns, long align) {
   const long by_size = min_columns > 0 ? count / min_columns : count;
-  const long parts = std::max<long>(1, std::min<long>(threads, by_size));
+  const long n = std::max<long>(1, std::min<long>(parts, by_size));
   std::vector<long> bounds{0};
-  for (long i = 1; i < parts; ++i) {
-    const long b = (count * i / parts) / align * align;
+  for (long i = 1; i < n; ++i) {
+    const long b = (count * i / n) / align * align;
     if (b > bounds.back() && b < count) bounds.push_back(b);
   }
   bounds.push_back(count);

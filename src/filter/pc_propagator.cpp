@@ -29,7 +29,7 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
       mapping_(std::move(mapping)),
       settings_(settings) {
   const int wanted = threads <= 0 ? ColumnWorkers::defaultThreads() : threads;
-  if (wanted > 1 && design_.pointCount() >= 2 * kMinPointsPerThread) {
+  if (wanted > 1 && design_.pointCount() >= 3 * kMinPointsPerPart) {
     workers_ = std::make_shared<ColumnWorkers>(wanted);
   }
   if (design_.termCount() != basis_.size()) {
@@ -200,7 +200,8 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
     for (Eigen::Index i = 0; i < valid; ++i) w.y.col(i) = w.at_points.col(w.cols[i]).head(ns).array();
   }
   const std::vector<long> parts =
-      workers_ ? columnParts(valid, workers_->threads(), kMinPointsPerThread) : std::vector<long>{};
+      workers_ ? columnParts(valid, 2 * workers_->threads(), kMinPointsPerPart)
+               : std::vector<long>{};
   if (valid > 0 && parts.size() > 2) {
     // Each part prepares and integrates its own columns (boundaries at SIMD
     // multiples, so every column takes the same code path as in one batch).

@@ -67,8 +67,10 @@ class PcPropagator {
 
   long integrations() const { return integrations_; }
   int threads() const { return workers_ ? workers_->threads() : 1; }
-  // Fewest points a thread gets: below it the hand-off costs more than it saves.
-  static constexpr long kMinPointsPerThread = 24;
+  // Fewest points of a part of the parallel forecast (two parts per thread,
+  // taken by whichever thread is free): below it the hand-off costs more than
+  // it saves. Designs under 3 parts' worth stay on one thread.
+  static constexpr long kMinPointsPerPart = 16;
 
  private:
   std::shared_ptr<const MechanicalModel> model_;

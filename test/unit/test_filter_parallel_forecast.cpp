@@ -81,6 +81,7 @@ TEST(ParallelForecast, SmallDesignsStayOnOneThread) {
 TEST(ColumnParts, AlignedBoundariesCoverTheColumns) {
   EXPECT_EQ(columnParts(141, 2, 24), (std::vector<long>{0, 64, 141}));
   EXPECT_EQ(columnParts(141, 3, 24), (std::vector<long>{0, 40, 88, 141}));
+  EXPECT_EQ(columnParts(141, 4, 16), (std::vector<long>{0, 32, 64, 104, 141}));
   EXPECT_EQ(columnParts(30, 2, 24), (std::vector<long>{0, 30}));
   EXPECT_EQ(columnParts(0, 2, 24), (std::vector<long>{0, 0}));
 }
