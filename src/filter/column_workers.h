@@ -42,7 +42,7 @@ class ColumnWorkers {
   std::vector<long> bounds_;
   const std::function<void(int, long, long)>* job_ = nullptr;
   long parts_ = 0;
-  std::atomic<long> next_{0};        // generation << 20 | next unclaimed part
+  std::atomic<long> next_{0};  // generation << 20 | next unclaimed part
   std::atomic<long> done_parts_{0};
   std::atomic<long> generation_{0};
   std::atomic<bool> stop_{false};

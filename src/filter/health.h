@@ -41,8 +41,8 @@ struct HealthStatus {
   bool gated = false;     // NIS above the innovation gate: sample not used
   bool damped = false;    // update scaled down to keep the means in the support; drives health
   bool reopened = false;  // uncertainty re-opened after a persistent violation
-  Eigen::VectorXd loo_error;   // per channel (ForecastReport::loo_error; empty: unavailable)
-  bool loo_exceeded = false;   // some channel above loo_warning (warning only)
+  Eigen::VectorXd loo_error;  // per channel (ForecastReport::loo_error; empty: unavailable)
+  bool loo_exceeded = false;  // some channel above loo_warning (warning only)
   bool healthy() const {
     return !non_finite && !forecast_failed && !nis_window_outside && !damped && !reopened;
   }

@@ -60,7 +60,8 @@ EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>&
   const std::shared_ptr<const MechanicalModel> model = makeModel(c, makeRoad(c));
   for (const std::string& name : names) {
     const int index = model->parameterIndex(name);
-    if (index < 0) throw ConfigError(c.source + ": no model parameter '" + name + "' to declare uncertain");
+    if (index < 0)
+      throw ConfigError(c.source + ": no model parameter '" + name + "' to declare uncertain");
     UncertainParameter u;
     u.name = name;
     u.nominal = model->nominalParameters()(index);

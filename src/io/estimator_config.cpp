@@ -480,8 +480,8 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   if (c.collocation.projection == ProjectionMethod::kQuadrature &&
       c.collocation.sequence != PointSequence::kGauss &&
       c.collocation.sequence != PointSequence::kSmolyak) {
-    col.fail("projection", "'quadrature'", "regression or auto for sequence " + seq +
-                                               " (quadrature needs gauss or smolyak)");
+    col.fail("projection", "'quadrature'",
+             "regression or auto for sequence " + seq + " (quadrature needs gauss or smolyak)");
   }
   if (c.collocation.sequence == PointSequence::kSmolyak &&
       c.collocation.projection == ProjectionMethod::kQuadrature &&

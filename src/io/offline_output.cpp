@@ -124,7 +124,8 @@ void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
     // Empty cells: no leave-one-out error for this sample (a point left out).
     for (std::size_t i = 0; i < r.loo_channels.size(); ++i) {
       samples << ',';
-      if (static_cast<std::size_t>(s.loo_error.size()) == r.loo_channels.size()) samples << s.loo_error[i];
+      if (static_cast<std::size_t>(s.loo_error.size()) == r.loo_channels.size())
+        samples << s.loo_error[i];
     }
     samples << '\n';
   }

@@ -73,14 +73,17 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
     throw std::invalid_argument("collocation design: point count must be positive, got " +
                                 std::to_string(count));
   }
-  const bool quadrature_rule = sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
+  const bool quadrature_rule =
+      sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
   if (projection == ProjectionMethod::kAuto) {
     projection = sequence == PointSequence::kGauss ? ProjectionMethod::kQuadrature
                                                    : ProjectionMethod::kRegression;
   }
   if (projection == ProjectionMethod::kQuadrature && !quadrature_rule) {
-    throw std::invalid_argument("collocation design: quadrature projection needs a quadrature rule "
-                                "(gauss or smolyak), not " + toString(sequence));
+    throw std::invalid_argument(
+        "collocation design: quadrature projection needs a quadrature rule "
+        "(gauss or smolyak), not " +
+        toString(sequence));
   }
   projection_ = projection;
   if (sequence == PointSequence::kSmolyak && projection == ProjectionMethod::kQuadrature &&
@@ -88,8 +91,8 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
     std::ostringstream msg;
     msg << "collocation design: smolyak level " << count << " integrates total degree "
         << smolyakExactDegree(count) << " exactly, the quadrature projection of order "
-        << basis.order() << " needs degree " << 2 * basis.order() << " (level >= "
-        << basis.order() << ", or projection: regression)";
+        << basis.order() << " needs degree " << 2 * basis.order() << " (level >= " << basis.order()
+        << ", or projection: regression)";
     throw std::invalid_argument(msg.str());
   }
   // For the Gauss rule `count` is per dimension; compare the total to S before
@@ -121,9 +124,9 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
       weights = std::move(rule.weights);
       if (points_.rows() < s) {
         std::ostringstream msg;
-        msg << "collocation design degenerate: smolyak level " << count << " has Q = "
-            << points_.rows() << " points < S = " << s << " basis terms (order " << basis.order()
-            << " in " << n << " germs); raise collocation.level";
+        msg << "collocation design degenerate: smolyak level " << count
+            << " has Q = " << points_.rows() << " points < S = " << s << " basis terms (order "
+            << basis.order() << " in " << n << " germs); raise collocation.level";
         throw std::invalid_argument(msg.str());
       }
       break;

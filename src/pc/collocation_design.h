@@ -21,7 +21,8 @@ PointSequence pointSequenceFromString(const std::string& name);  // throws std::
 // n = 4 and 6), where least squares is an orthogonal projection.
 enum class ProjectionMethod { kAuto, kRegression, kQuadrature };
 std::string toString(ProjectionMethod m);
-ProjectionMethod projectionMethodFromString(const std::string& name);  // throws std::invalid_argument
+ProjectionMethod projectionMethodFromString(
+    const std::string& name);  // throws std::invalid_argument
 
 class CollocationDesign {
  public:

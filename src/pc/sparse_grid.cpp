@@ -33,7 +33,8 @@ SparseGridRule smolyakRule(const std::vector<OrthonormalFamily>& families, int l
   const int n = static_cast<int>(families.size());
   if (n < 1) throw std::invalid_argument("smolyakRule: need at least one germ");
   if (level < 0 || level > 30) {
-    throw std::invalid_argument("smolyakRule: level must be in 0..30, got " + std::to_string(level));
+    throw std::invalid_argument("smolyakRule: level must be in 0..30, got " +
+                                std::to_string(level));
   }
   // rules[d][l]: the (l + 1)-point Gauss rule of germ d.
   std::vector<std::vector<QuadratureRule>> rules(n);

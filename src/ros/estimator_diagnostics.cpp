@@ -140,8 +140,8 @@ void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrap
   s.add("coherence flagged", u.coherence_flagged);
   const std::vector<std::string>& channels = config_.model_type->channelNames();
   for (Eigen::Index i = 0; i < h.loo_error.size(); ++i) {
-    const std::string name = i < static_cast<Eigen::Index>(channels.size())
-                                 ? channels[i] : std::to_string(i);
+    const std::string name =
+        i < static_cast<Eigen::Index>(channels.size()) ? channels[i] : std::to_string(i);
     s.add("projection loo error " + name, h.loo_error[i]);
   }
   s.add("projection loo warning threshold", config_.collocation.loo_warning);

@@ -274,7 +274,8 @@ void designCounters(benchmark::State& state, EstimatorConfig c) {
   const double e_pc = momentError(pc, shared().ref);
   const double n_match = 2000.0 * std::pow(mc.first / e_pc, 2.0);
   state.counters["sequence"] = static_cast<double>(c.collocation.sequence);
-  state.counters["regression"] = s.propagator->design().projection() == ProjectionMethod::kRegression;
+  state.counters["regression"] =
+      s.propagator->design().projection() == ProjectionMethod::kRegression;
   state.counters["p"] = c.pc_order;
   state.counters["S"] = s.propagator->termCount();
   state.counters["Q"] = q;
@@ -284,7 +285,8 @@ void designCounters(benchmark::State& state, EstimatorConfig c) {
   state.counters["wall_ratio"] = n_match * mc.second / pc_cpu;
   state.counters["filter_mean_error"] =
       ((mean - ref.mean).array().abs() / ref.stddev.array()).maxCoeff();
-  state.counters["filter_std_error"] = ((stddev.array() / ref.stddev.array()) - 1.0).abs().maxCoeff();
+  state.counters["filter_std_error"] =
+      ((stddev.array() / ref.stddev.array()) - 1.0).abs().maxCoeff();
 }
 
 struct Design {
@@ -381,7 +383,12 @@ void BM_ManyParametersAccuracy(benchmark::State& state) {
   state.counters["halton_error"] = momentError(m_halton, ref);
 }
 BENCHMARK(BM_ManyParametersAccuracy)
-    ->Arg(3)->Arg(4)->Arg(6)->Arg(8)->Iterations(1)->Unit(benchmark::kSecond);
+    ->Arg(3)
+    ->Arg(4)
+    ->Arg(6)
+    ->Arg(8)
+    ->Iterations(1)
+    ->Unit(benchmark::kSecond);
 
 }  // namespace
 }  // namespace pc_ekf::bench

@@ -103,7 +103,8 @@ void BM_ManyParameters(benchmark::State& state) {
 }
 BENCHMARK(BM_ManyParameters)
     ->ArgsProduct({{2, 3, 4, 6, 8}, {1, 2}, {0, 1}})
-    ->Iterations(1)->Unit(benchmark::kMillisecond);
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
 
 // The forecast alone (the first 20 sample intervals from the prior) on 1 and
 // 2 threads in the same run, for designs with Q >= 100: speedup = t1 / t2.
@@ -114,20 +115,24 @@ void BM_ForecastThreads(benchmark::State& state) {
   int q = 0;
   for (auto _ : state) {
     for (int threads = 1; threads <= 2; ++threads) {
-      const EstimatorConfig c = sparse ? manyParameterConfig(8, 2, PointSequence::kSmolyak, 2, threads)
-                                       : manyParameterConfig(4, 4, PointSequence::kHalton, 140, threads);
+      const EstimatorConfig c =
+          sparse ? manyParameterConfig(8, 2, PointSequence::kSmolyak, 2, threads)
+                 : manyParameterConfig(4, 4, PointSequence::kHalton, 140, threads);
       const Scenario s = makeScenario(c);
       q = s.propagator->design().pointCount();
       const Eigen::MatrixXd prior = s.propagator->priorState();
-      t[threads - 1] = bestOf(10, [&] {
-        Eigen::MatrixXd x = prior;
-        double t0 = 0.0;
-        for (int k = 0; k < 20; ++k) {
-          s.propagator->forecast(x, t0, s.series[k].time);
-          t0 = s.series[k].time;
-        }
-        benchmark::DoNotOptimize(x.data());
-      }, wallSeconds);
+      t[threads - 1] = bestOf(
+          10,
+          [&] {
+            Eigen::MatrixXd x = prior;
+            double t0 = 0.0;
+            for (int k = 0; k < 20; ++k) {
+              s.propagator->forecast(x, t0, s.series[k].time);
+              t0 = s.series[k].time;
+            }
+            benchmark::DoNotOptimize(x.data());
+          },
+          wallSeconds);
     }
   }
   state.counters["Q"] = q;

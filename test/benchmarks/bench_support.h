@@ -51,9 +51,9 @@ inline EstimatorConfig paperConfig(int samples, Integration integration = Integr
 // Roll-plane parameters declared uncertain beyond M and d_CG (+-10 %, truth at
 // xi = 0.1), in this order, for n = 3..8 uncertain parameters.
 inline std::vector<std::string> extraUncertainNames(int n) {
-  static const std::vector<std::string> names = {
-      "spring_linear_left", "spring_linear_right",  "damping_left",
-      "damping_right",      "tyre_stiffness_left", "tyre_stiffness_right"};
+  static const std::vector<std::string> names = {"spring_linear_left",  "spring_linear_right",
+                                                 "damping_left",        "damping_right",
+                                                 "tyre_stiffness_left", "tyre_stiffness_right"};
   return {names.begin(), names.begin() + std::max(0, std::min<int>(n - 2, names.size()))};
 }
 

@@ -125,9 +125,9 @@ TEST(SmolyakDesign, RefusesALevelTooLowForTheQuadratureProjection) {
   // Regression on the same nodes only needs Q >= S (29 >= 15, not 13).
   EXPECT_NO_THROW(CollocationDesign(basis, PointSequence::kSmolyak, 3));
   EXPECT_THROW(CollocationDesign(basis, PointSequence::kSmolyak, 2), std::invalid_argument);
-  EXPECT_THROW(CollocationDesign(basis, PointSequence::kHalton, 30, 1, 1e8,
-                                 ProjectionMethod::kQuadrature),
-               std::invalid_argument);
+  EXPECT_THROW(
+      CollocationDesign(basis, PointSequence::kHalton, 30, 1, 1e8, ProjectionMethod::kQuadrature),
+      std::invalid_argument);
 }
 
 // Leave-one-out by brute force: refit without point q, predict at q.
