@@ -33,25 +33,31 @@ EstimatorConfig scalingConfig(int n, int p) {
   return c;
 }
 
+// Per sample of the first `samples`, the best over `passes` runs of the
+// one-step filter from the prior of the time `clock` measures for its update.
+std::vector<double> bestStepTimes(const Scenario& s, int samples, int passes, double (*clock)()) {
+  OneStepFilter filter(s.propagator, makeOneStepSettings(s.config));
+  std::vector<double> best(samples, INFINITY);
+  for (int pass = 0; pass < passes; ++pass) {
+    filter.reset();
+    for (int k = 0; k < samples; ++k) {
+      const double t0 = clock();
+      const StepResult r = filter.process(s.series[k]);
+      best[k] = std::min(best[k], clock() - t0);
+      benchmark::DoNotOptimize(r.mean.data());
+    }
+  }
+  return best;
+}
+
 // Median and p99 over the samples of the best-of-passes CPU time per update.
 void BM_UpdateScaling(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0)), p = static_cast<int>(state.range(1));
   const Scenario s = makeScenario(scalingConfig(n, p));
   const int samples = 20;  // the first 0.6 s: the bump, the expensive part
   const int passes = s.propagator->termCount() > 200 ? 2 : 5;
-  OneStepFilter filter(s.propagator, makeOneStepSettings(s.config));
-  std::vector<double> best(samples, INFINITY);
-  for (auto _ : state) {
-    for (int pass = 0; pass < passes; ++pass) {
-      filter.reset();
-      for (int k = 0; k < samples; ++k) {
-        const double c0 = threadCpuSeconds();
-        const StepResult r = filter.process(s.series[k]);
-        best[k] = std::min(best[k], threadCpuSeconds() - c0);
-        benchmark::DoNotOptimize(r.mean.data());
-      }
-    }
-  }
+  std::vector<double> best;
+  for (auto _ : state) best = bestStepTimes(s, samples, passes, threadCpuSeconds);
   state.counters["n"] = n;
   state.counters["p"] = p;
   state.counters["S"] = s.propagator->termCount();
@@ -77,19 +83,8 @@ void BM_ManyParameters(benchmark::State& state) {
              : manyParameterConfig(n, p, PointSequence::kSmolyak, p, threads);
   const Scenario s = makeScenario(c);
   const int samples = 20;
-  OneStepFilter filter(s.propagator, makeOneStepSettings(s.config));
-  std::vector<double> best(samples, INFINITY);
-  for (auto _ : state) {
-    for (int pass = 0; pass < 8; ++pass) {
-      filter.reset();
-      for (int k = 0; k < samples; ++k) {
-        const double w0 = wallSeconds();
-        const StepResult r = filter.process(s.series[k]);
-        best[k] = std::min(best[k], wallSeconds() - w0);
-        benchmark::DoNotOptimize(r.mean.data());
-      }
-    }
-  }
+  std::vector<double> best;
+  for (auto _ : state) best = bestStepTimes(s, samples, 8, wallSeconds);
   const double dt = s.config.sampling.duration / s.config.sampling.samples;
   state.counters["n"] = n;
   state.counters["p"] = p;
