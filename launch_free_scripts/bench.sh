@@ -64,8 +64,8 @@ run_bench() {  # run_bench NAME [benchmark flags...]
 if [ "$quick" = 1 ]; then
   run_bench bench_one_step --benchmark_filter='OneStep|Forecast'
   run_bench bench_integrator --benchmark_filter='StepAccuracy/(1000|3000)/'
-  run_bench bench_scaling --benchmark_filter='UpdateScaling/(2|4)/(2|4|8)|WholeSet/(100|10000)$'
-  run_bench bench_propagation --benchmark_filter='PcVersus'
+  run_bench bench_scaling --benchmark_filter='UpdateScaling/(2|4)/(2|4|8)|WholeSet/(100|10000)$|ManyParameters/(4|8)/2/1|ForecastThreads'
+  run_bench bench_propagation --benchmark_filter='PcVersus|DesignDefault'
   run_bench bench_checkpoint --benchmark_filter='WhileCheckpointWritten|WithoutCheckpoint|Snapshot'
   run_bench bench_odeint
 else

@@ -89,6 +89,12 @@ result = {
     "checkpoint_in_callback_delay_max_ms_1khz": get(checkpoint, ckpt_fg, "delay_max_ms"),
     "no_checkpoint_delay_max_ms_1khz": get(checkpoint, ckpt_none, "delay_max_ms"),
     "odeint_vs_handwritten": {k: b.get("us_per_interval") for k, b in odeint.items()} or None,
+    "mc_propagation_sample_ratio_default": get(propagation, "BM_DesignDefault/iterations:1", "sample_ratio"),
+    # Q = 2S Halton, p = 2: the sparse grid of the same p has the larger moment
+    # error (many_parameters_accuracy), so the keys are the Halton design's.
+    "rtf_n4": get(scaling, "BM_ManyParameters/4/2/1/iterations:1", "real_time_factor"),
+    "rtf_n8": get(scaling, "BM_ManyParameters/8/2/1/iterations:1", "real_time_factor"),
+    "forecast_thread_speedup": get(scaling, "BM_ForecastThreads/0/iterations:1", "speedup"),
 }
 
 details = {
@@ -108,6 +114,20 @@ details = {
         for k, b in scaling.items() if k.startswith("BM_WholeSet")],
     "pc_vs_mc": {k: {c: v for c, v in b.items() if c not in ("family_index", "per_family_instance_index", "run_name", "run_type", "repetitions", "repetition_index", "threads", "iterations", "time_unit")}
                  for k, b in propagation.items()},
+    "design_curve": [
+        {c: b.get(c) for c in ("sequence", "regression", "p", "S", "Q", "pc_error", "sample_ratio",
+                               "pc_cpu_s", "wall_ratio", "filter_mean_error", "filter_std_error")}
+        for k, b in propagation.items() if k.startswith("BM_DesignCurve")],
+    "design_default": propagation.get("BM_DesignDefault/iterations:1", {}),
+    "many_parameters": [
+        {c: b.get(c) for c in ("n", "p", "S", "Q", "smolyak", "threads", "median_us", "p99_us",
+                               "real_time_factor")}
+        for k, b in scaling.items() if k.startswith("BM_ManyParameters")],
+    "many_parameters_accuracy": [
+        {c: b.get(c) for c in ("n", "p", "Q_smolyak", "Q_halton", "smolyak_error", "halton_error",
+                               "reference_check")}
+        for k, b in propagation.items() if k.startswith("BM_ManyParametersAccuracy")],
+    "forecast_threads": {k: b for k, b in scaling.items() if k.startswith("BM_ForecastThreads")},
     "enkf": enkf.get(enkf_name, {}),
     "reference_posterior_case_b": posterior.get(post, {}),
     "node": node,
@@ -237,6 +257,34 @@ for b in details["wholeset"]:
         f"{fmt(b['forecast_s'], ' s')} / {fmt(b['beyond_forecast_s'], ' s')}",
         "< 0.1 s (N = 1e4)" if b["samples"] == 10000 else "linear",
         cmp(b["beyond_forecast_s"], "<=", 0.1) if b["samples"] == 10000 else None)
+sequences = {0: "halton", 1: "hammersley", 2: "gauss", 3: "smolyak"}
+for b in details["design_curve"]:
+    label = sequences.get(int(b["sequence"] or 0), "?") + (" (regression)" if b["regression"] and b["sequence"] == 3 else "")
+    row(f"design {label}, p = {b['p']:.0f}, Q = {b['Q']:.0f}: moment error, MC sample ratio, "
+        f"filter mean/std error vs exact posterior",
+        f"{fmt(b['pc_error'])}, {fmt(b['sample_ratio'], 'x')}, {fmt(b['filter_mean_error'])}/{fmt(b['filter_std_error'])}",
+        "", None)
+row("MC sample ratio of the non-paper default design (vehicle_live.yaml)",
+    fmt(result["mc_propagation_sample_ratio_default"], "x"), ">= 100x",
+    cmp(result["mc_propagation_sample_ratio_default"], ">=", 100))
+for b in details["many_parameters_accuracy"]:
+    row(f"n = {b['n']:.0f}, p = {b['p']:.0f}: moment error sparse grid (Q = {b['Q_smolyak']:.0f}) / "
+        f"Halton Q = 2S = {b['Q_halton']:.0f}",
+        f"{fmt(b['smolyak_error'])} / {fmt(b['halton_error'])}", "sparse <= Halton",
+        None if b["smolyak_error"] is None or b["halton_error"] is None
+        else b["smolyak_error"] <= b["halton_error"])
+for b in details["many_parameters"]:
+    if b["threads"] is not None:
+        row(f"n = {b['n']:.0f}, p = {b['p']:.0f}, S = {b['S']:.0f}, "
+            f"{'sparse grid' if b['smolyak'] else 'Halton'} Q = {b['Q']:.0f}, "
+            f"{b['threads']:.0f} thread(s): median update, real-time factor",
+            f"{fmt(b['median_us'], ' us')}, {fmt(b['real_time_factor'], 'x')}", "", None)
+row("rtf_n4 (p = 2, Q = 2S = 30 Halton, 2 threads configured)", fmt(result["rtf_n4"], "x"), ">= 500x",
+    cmp(result["rtf_n4"], ">=", 500))
+row("rtf_n8 (p = 2, Q = 2S = 90 Halton, 2 threads)", fmt(result["rtf_n8"], "x"), ">= 100x",
+    cmp(result["rtf_n8"], ">=", 100))
+row("forecast speedup on 2 threads (n = 4, p = 4, Q = 140 Halton)", fmt(result["forecast_thread_speedup"], "x"),
+    ">= 1.7x", cmp(result["forecast_thread_speedup"], ">=", 1.7))
 p = posterior.get(post, {})
 row(f"reference posterior case B, 2 threads ({fmt(p.get('simulations'))} simulations)",
     fmt(result["reference_posterior_s"], " s"), "< 30 s", cmp(result["reference_posterior_s"], "<=", 30))

@@ -32,6 +32,12 @@ std::vector<std::string> HealthStatus::warnings() const {
                 "(model error, or a parameter that should be declared uncertain)");
   }
   if (reopened) w.push_back("uncertainty re-opened after a persistent NIS violation");
+  if (loo_exceeded) {
+    o.str("");
+    o << "projection leave-one-out error " << loo_error.maxCoeff()
+      << " above the warning threshold (raise pc.order or the collocation design)";
+    w.push_back(o.str());
+  }
   return w;
 }
 
@@ -94,6 +100,8 @@ HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const Foreca
                                    const Eigen::MatrixXd& coeffs) {
   HealthStatus h;
   h.forecast_failed = !forecast.ok;
+  h.loo_error = forecast.loo_error;
+  h.loo_exceeded = h.loo_error.size() > 0 && h.loo_error.maxCoeff() > settings_.loo_warning;
   h.non_finite = !update.finite || !coeffs.allFinite();
   if (update.channels > 0 && !h.non_finite) {
     h.nis = update.nis;

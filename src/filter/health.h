@@ -21,6 +21,9 @@ struct HealthSettings {
   int support_draws = 2000;      // germ samples for the outside-support mass
   double support_mass_limit = 0.05;
   std::uint64_t seed = 11;
+  // Relative leave-one-out error of the forecast's projection above which a
+  // channel is flagged (warning: the expansion misses part of the response).
+  double loo_warning = 0.1;
 };
 
 struct HealthStatus {
@@ -38,6 +41,8 @@ struct HealthStatus {
   bool gated = false;     // NIS above the innovation gate: sample not used
   bool damped = false;    // update scaled down to keep the means in the support; drives health
   bool reopened = false;  // uncertainty re-opened after a persistent violation
+  Eigen::VectorXd loo_error;  // per channel (ForecastReport::loo_error; empty: unavailable)
+  bool loo_exceeded = false;  // some channel above loo_warning (warning only)
   bool healthy() const {
     return !non_finite && !forecast_failed && !nis_window_outside && !damped && !reopened;
   }

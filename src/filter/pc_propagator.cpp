@@ -13,16 +13,25 @@ void ForecastReport::merge(const ForecastReport& o) {
   nonfinite_points += o.nonfinite_points;
   ok = ok && o.ok;
   if (first_problem.empty()) first_problem = o.first_problem;
+  if (loo_error.size() == 0) {
+    loo_error = o.loo_error;
+  } else if (o.loo_error.size() == loo_error.size()) {
+    loo_error = loo_error.cwiseMax(o.loo_error);
+  }
 }
 
 PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
                            const PolynomialBasis& basis, const CollocationDesign& design,
-                           ParameterMapping mapping, IntegratorSettings settings)
+                           ParameterMapping mapping, IntegratorSettings settings, int threads)
     : model_(std::move(model)),
       basis_(basis),
       design_(design),
       mapping_(std::move(mapping)),
       settings_(settings) {
+  const int wanted = threads <= 0 ? ColumnWorkers::defaultThreads() : threads;
+  if (wanted > 1 && design_.pointCount() >= 3 * kMinPointsPerPart) {
+    workers_ = std::make_shared<ColumnWorkers>(wanted);
+  }
   if (design_.termCount() != basis_.size()) {
     throw std::invalid_argument("PcPropagator: design and basis sizes differ");
   }
@@ -190,7 +199,24 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
   } else {
     for (Eigen::Index i = 0; i < valid; ++i) w.y.col(i) = w.at_points.col(w.cols[i]).head(ns).array();
   }
-  if (valid > 0) {
+  const std::vector<long> parts =
+      workers_ ? columnParts(valid, 2 * workers_->threads(), kMinPointsPerPart)
+               : std::vector<long>{};
+  if (valid > 0 && parts.size() > 2) {
+    // Each part prepares and integrates its own columns (boundaries at SIMD
+    // multiples, so every column takes the same code path as in one batch).
+    ForecastWork& work = w;  // the caller's buffers (w names each thread's own)
+    workers_->run(parts, [&](int, long begin, long end) {
+      thread_local Eigen::ArrayXXd y_part;
+      const Eigen::Index count = end - begin;
+      const std::vector<Eigen::Index> cols(work.cols.begin() + begin, work.cols.begin() + end);
+      const auto batch = model_->prepare(params(Eigen::all, cols));
+      y_part = work.y.middleCols(begin, count);
+      integrate(*model_, *batch, t0, t1, y_part, settings_);
+      work.y.middleCols(begin, count) = y_part;
+    });
+    integrations_ += static_cast<long>(valid);
+  } else if (valid > 0) {
     const auto batch = valid == q_count ? model_->prepare(params)
                                         : model_->prepare(params(Eigen::all, w.cols));
     integrate(*model_, *batch, t0, t1, w.y, settings_);
@@ -215,6 +241,9 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
     smallProduct(w.y.data(), projector.data(), s_count, 1, w.at_points.data(), ns, q_count,
                  s_count);
     x.topRows(ns) = w.at_points;
+    if (design_.hasLeaveOneOut()) {
+      report.loo_error = design_.leaveOneOutError(model_->observationMatrix() * w.y.matrix());
+    }
     return report;
   }
   Eigen::MatrixXd propagated = Eigen::MatrixXd::Zero(ns, q_count);

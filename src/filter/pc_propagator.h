@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/filter/column_workers.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/mechanical_model.h"
@@ -25,14 +26,21 @@ struct ForecastReport {
   int nonfinite_points = 0;  // integration produced NaN/Inf
   bool ok = true;
   std::string first_problem;
+  // Relative leave-one-out error of the projection per model channel
+  // (CollocationDesign::leaveOneOutError of the channels at the points); empty
+  // when a point was dropped or the design has none (Q = S).
+  Eigen::VectorXd loo_error;
   void merge(const ForecastReport& other);
 };
 
 class PcPropagator {
  public:
+  // threads: the forecast integrates the collocation points on this many
+  // threads (<= 0: the machine's cores); the result is bitwise the same for
+  // any count (each point's integration is independent of the others').
   PcPropagator(std::shared_ptr<const MechanicalModel> model, const PolynomialBasis& basis,
                const CollocationDesign& design, ParameterMapping mapping,
-               IntegratorSettings settings);
+               IntegratorSettings settings, int threads = 1);
 
   const MechanicalModel& model() const { return *model_; }
   const PolynomialBasis& basis() const { return basis_; }
@@ -58,6 +66,11 @@ class PcPropagator {
                           ForecastReport* report) const;
 
   long integrations() const { return integrations_; }
+  int threads() const { return workers_ ? workers_->threads() : 1; }
+  // Fewest points of a part of the parallel forecast (two parts per thread,
+  // taken by whichever thread is free): below it the hand-off costs more than
+  // it saves. Designs under 3 parts' worth stay on one thread.
+  static constexpr long kMinPointsPerPart = 16;
 
  private:
   std::shared_ptr<const MechanicalModel> model_;
@@ -66,6 +79,7 @@ class PcPropagator {
   ParameterMapping mapping_;
   IntegratorSettings settings_;
   std::vector<int> full_index_;  // model parameter index of each uncertain parameter
+  std::shared_ptr<ColumnWorkers> workers_;  // null: one thread
   mutable long integrations_ = 0;  // point-intervals integrated (cost accounting)
 };
 

@@ -42,14 +42,34 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model) {
   ParameterMapping mapping(*model, c.uncertain);
   const PolynomialBasis basis(mapping.germs(), c.pc_order);
+  const bool smolyak = c.collocation.sequence == PointSequence::kSmolyak;
   try {
-    const CollocationDesign design(basis, c.collocation.sequence, c.collocation.points,
-                                   c.collocation.start_index, c.collocation.max_condition);
+    const CollocationDesign design(basis, c.collocation.sequence,
+                                   c.collocation.designCount(c.pc_order), c.collocation.start_index,
+                                   c.collocation.max_condition, c.collocation.projection);
     return std::make_shared<PcPropagator>(std::move(model), basis, design, std::move(mapping),
-                                          c.integration);
+                                          c.integration, c.collocation.threads);
   } catch (const std::invalid_argument& e) {
-    throw ConfigError(c.source + ": key 'collocation.points': " + e.what());
+    throw ConfigError(c.source + ": key 'collocation." + (smolyak ? "level" : "points") +
+                      "': " + e.what());
   }
+}
+
+EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>& names,
+                              double range, double xi_truth) {
+  const std::shared_ptr<const MechanicalModel> model = makeModel(c, makeRoad(c));
+  for (const std::string& name : names) {
+    const int index = model->parameterIndex(name);
+    if (index < 0)
+      throw ConfigError(c.source + ": no model parameter '" + name + "' to declare uncertain");
+    UncertainParameter u;
+    u.name = name;
+    u.nominal = model->nominalParameters()(index);
+    u.relative_range = range;
+    c.uncertain.push_back(u);
+    c.truth.xi.push_back(xi_truth);
+  }
+  return c;
 }
 
 NoiseModel makeNoiseModel(const EstimatorConfig& c) {
@@ -80,6 +100,7 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
   s.health.nis_window = c.health.nis_window;
   s.health.nis_confidence = c.health.nis_confidence;
   s.health.seed = c.pdf.seed;
+  s.health.loo_warning = c.collocation.loo_warning;
   s.innovation_gate = c.health.innovation_gate;
   s.support = c.safeguards.support;
   s.drift = Eigen::Map<const Eigen::VectorXd>(c.safeguards.drift.data(), c.safeguards.drift.size());

@@ -36,6 +36,13 @@ NoiseModel makeNoiseModel(const EstimatorConfig& c);
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c);
 std::vector<int> channelIndices(const EstimatorConfig& c);
 
+// `c` with the model parameters `names` declared uncertain as well: nominal
+// the configured vehicle's value, relative_range `range`, a Beta(2,2) germ,
+// the truth at germ coordinate `xi_truth` (how the scaling benchmarks and
+// tests grow n). Throws ConfigError for a name the model does not have.
+EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>& names,
+                              double range, double xi_truth);
+
 // Synthetic data of the config (truth section, sampling, noise) with `seed`.
 // `model` is the estimator's; truth.vehicle gives the truth its own model on
 // the same road.

@@ -466,15 +466,39 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   try {
     c.collocation.sequence = pointSequenceFromString(seq);
   } catch (const std::invalid_argument&) {
-    col.fail("sequence", "'" + seq + "'", "halton, hammersley or gauss");
+    col.fail("sequence", "'" + seq + "'", "halton, hammersley, gauss or smolyak");
   }
   col.integer("points", c.collocation.points, 1, 1000000);
+  col.integer("level", c.collocation.level, 0, 30);
+  std::string projection = toString(c.collocation.projection);
+  col.text("projection", projection);
+  try {
+    c.collocation.projection = projectionMethodFromString(projection);
+  } catch (const std::invalid_argument&) {
+    col.fail("projection", "'" + projection + "'", "auto, regression or quadrature");
+  }
+  if (c.collocation.projection == ProjectionMethod::kQuadrature &&
+      c.collocation.sequence != PointSequence::kGauss &&
+      c.collocation.sequence != PointSequence::kSmolyak) {
+    col.fail("projection", "'quadrature'",
+             "regression or auto for sequence " + seq + " (quadrature needs gauss or smolyak)");
+  }
+  if (c.collocation.sequence == PointSequence::kSmolyak &&
+      c.collocation.projection == ProjectionMethod::kQuadrature &&
+      c.collocation.designCount(c.pc_order) < c.pc_order) {
+    col.fail("level", std::to_string(c.collocation.level),
+             "at least pc.order = " + std::to_string(c.pc_order) +
+                 " for the quadrature projection (exact to degree 2 level + 1), or "
+                 "projection: regression");
+  }
   col.unsignedInteger("start_index", c.collocation.start_index);
   col.number("max_condition", c.collocation.max_condition, 1.0, kInf);
+  col.integer("threads", c.collocation.threads, 0, 1024);
+  col.number("loo_warning", c.collocation.loo_warning, 0.0, kInf);
   const double q = c.collocation.sequence == PointSequence::kGauss
                        ? std::pow(c.collocation.points, n)
                        : c.collocation.points;
-  if (q < terms) {
+  if (c.collocation.sequence != PointSequence::kSmolyak && q < terms) {
     col.fail("points", std::to_string(c.collocation.points),
              "at least S = " + std::to_string(terms) + " collocation points (basis terms for " +
                  std::to_string(n) + " germs, order " + std::to_string(c.pc_order) + ")");

@@ -87,8 +87,17 @@ struct TruthConfig {
 struct CollocationConfig {
   PointSequence sequence = PointSequence::kHalton;
   int points = 30;
+  int level = -1;  // smolyak only; -1 = the PC order (the lowest exact for the projection)
+  ProjectionMethod projection = ProjectionMethod::kAuto;
   std::uint64_t start_index = 1;
   double max_condition = 1e8;
+  int threads = 0;  // forecast threads; 0 = the machine's cores
+  // Relative leave-one-out error of the forecast above which a warning is raised.
+  double loo_warning = 0.1;
+  // The count CollocationDesign takes: points, or the level for smolyak.
+  int designCount(int pc_order) const {
+    return sequence == PointSequence::kSmolyak ? (level < 0 ? pc_order : level) : points;
+  }
 };
 
 struct EsMdaConfig {

@@ -83,7 +83,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
     last = filter.process(m);
     SampleRecord rec{last.index, last.time, last.mean, last.stddev, last.coefficients,
                      last.health.nis, last.health.nis_window_outside, last.health.band_nested,
-                     last.health.healthy()};
+                     last.health.healthy(), last.health.loo_error};
     r->records.push_back(rec);
     r->nis_window_violations += last.health.nis_window_outside;
     nested += last.health.band_nested;
@@ -93,6 +93,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
     r->reopened += last.reopened;
   }
   r->rejected_samples = filter.rejected();
+  r->loo_channels = c.model_type->channelNames();
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);
   r->pdfs = pcPdfs(c, prop->basis(), last.coefficients);
@@ -153,7 +154,7 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
   const BatchResult b =
       batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
   SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
-                   b.coefficients, b.nis, false, true, b.finite && b.forecast.ok};
+                   b.coefficients, b.nis, false, true, b.finite && b.forecast.ok, {}};
   r->records.push_back(rec);
   summarise(c, b.mean, b.stddev, r);
   r->pdfs = pcPdfs(c, prop->basis(), b.coefficients);
@@ -181,7 +182,7 @@ void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
     last = enkf.process(series[i]);
     frozen = std::max(frozen, last.inadmissible_members);
     r->records.push_back({last.index, last.time, last.mean, last.stddev, Eigen::MatrixXd(),
-                          last.nis, false, true, last.finite});
+                          last.nis, false, true, last.finite, {}});
     if (progress && (i + 1) % 10 == 0) {
       progress("enkf: sample " + std::to_string(i + 1) + "/" + std::to_string(series.size()));
     }
@@ -206,7 +207,7 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
       makeReferenceSettings(c), cache, progress);
   summarise(c, p.mean, p.stddev, r);
   r->records.push_back({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time,
-                        p.mean, p.stddev, Eigen::MatrixXd(), 0.0, false, true, true});
+                        p.mean, p.stddev, Eigen::MatrixXd(), 0.0, false, true, true, {}});
   r->pdfs = p.marginals;
   r->integrations = p.simulations;
   r->modes = static_cast<int>(p.modes.size());

@@ -30,6 +30,7 @@ struct SampleRecord {
   bool nis_window_outside = false;
   bool band_nested = true;
   bool healthy = true;
+  Eigen::VectorXd loo_error;  // one-step: per channel (ForecastReport::loo_error)
 };
 
 struct ParameterSummary {
@@ -52,6 +53,7 @@ struct OfflineResult {
   std::vector<std::string> warnings;
   std::vector<ParameterSummary> parameters;
   std::vector<SampleRecord> records;
+  std::vector<std::string> loo_channels;  // one-step: the channels of SampleRecord::loo_error
   std::vector<Histogram> pdfs;  // final, one per parameter (parameter units)
   CoherenceCheck coherence;
   int nis_window_violations = 0;

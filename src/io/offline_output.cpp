@@ -98,7 +98,9 @@ void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
     samples << ',' << p.name << "_mean," << p.name << "_stddev";
     for (int j = 0; j < terms; ++j) samples << ',' << p.name << "_c" << j;
   }
-  samples << ",nis,nis_window_outside,band_nested,healthy\n";
+  samples << ",nis,nis_window_outside,band_nested,healthy";
+  for (const auto& channel : r.loo_channels) samples << ",loo_" << channel;
+  samples << '\n';
   for (const SampleRecord& s : r.records) {
     samples << s.index << ',' << s.time;
     for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
@@ -106,7 +108,14 @@ void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
       for (int j = 0; j < terms; ++j) samples << ',' << s.coefficients(i, j);
     }
     samples << ',' << s.nis << ',' << s.nis_window_outside << ',' << s.band_nested << ','
-            << s.healthy << '\n';
+            << s.healthy;
+    // Empty cells: no leave-one-out error for this sample (a point left out).
+    for (std::size_t i = 0; i < r.loo_channels.size(); ++i) {
+      samples << ',';
+      if (static_cast<std::size_t>(s.loo_error.size()) == r.loo_channels.size())
+        samples << s.loo_error[i];
+    }
+    samples << '\n';
   }
 
   std::ofstream pdfs = openOutput(dir + "/pdfs.csv");

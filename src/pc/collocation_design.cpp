@@ -1,10 +1,12 @@
 #include "pc_ekf/pc/collocation_design.h"
 
+#include <cmath>
 #include <limits>
 #include <sstream>
 #include <stdexcept>
 
 #include "pc_ekf/pc/point_sets.h"
+#include "pc_ekf/pc/sparse_grid.h"
 
 namespace pc_ekf {
 
@@ -16,31 +18,88 @@ std::string toString(PointSequence s) {
       return "hammersley";
     case PointSequence::kGauss:
       return "gauss";
+    case PointSequence::kSmolyak:
+      return "smolyak";
   }
   throw std::invalid_argument("toString: unknown PointSequence value");
+}
+
+std::string toString(ProjectionMethod m) {
+  switch (m) {
+    case ProjectionMethod::kAuto:
+      return "auto";
+    case ProjectionMethod::kRegression:
+      return "regression";
+    case ProjectionMethod::kQuadrature:
+      return "quadrature";
+  }
+  throw std::invalid_argument("toString: unknown ProjectionMethod value");
+}
+
+ProjectionMethod projectionMethodFromString(const std::string& name) {
+  if (name == "auto") return ProjectionMethod::kAuto;
+  if (name == "regression") return ProjectionMethod::kRegression;
+  if (name == "quadrature") return ProjectionMethod::kQuadrature;
+  throw std::invalid_argument("unknown collocation projection '" + name +
+                              "' (accepted: auto, regression, quadrature)");
 }
 
 PointSequence pointSequenceFromString(const std::string& name) {
   if (name == "halton") return PointSequence::kHalton;
   if (name == "hammersley") return PointSequence::kHammersley;
   if (name == "gauss") return PointSequence::kGauss;
+  if (name == "smolyak") return PointSequence::kSmolyak;
   throw std::invalid_argument("unknown collocation point sequence '" + name +
-                              "' (accepted: halton, hammersley, gauss)");
+                              "' (accepted: halton, hammersley, gauss, smolyak)");
 }
 
+namespace {
+
+std::vector<OrthonormalFamily> familiesOf(const PolynomialBasis& basis) {
+  std::vector<OrthonormalFamily> families;
+  for (int d = 0; d < basis.dimension(); ++d) families.push_back(basis.family(d));
+  return families;
+}
+
+}  // namespace
+
 CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence sequence,
-                                     int count, std::uint64_t halton_start, double max_condition) {
+                                     int count, std::uint64_t halton_start, double max_condition,
+                                     ProjectionMethod projection)
+    : sequence_(sequence) {
   const int n = basis.dimension();
   const int s = basis.size();
-  if (count < 1) {
+  if (count < 1 && !(sequence == PointSequence::kSmolyak && count == 0)) {
     throw std::invalid_argument("collocation design: point count must be positive, got " +
                                 std::to_string(count));
+  }
+  const bool quadrature_rule =
+      sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
+  if (projection == ProjectionMethod::kAuto) {
+    projection = sequence == PointSequence::kGauss ? ProjectionMethod::kQuadrature
+                                                   : ProjectionMethod::kRegression;
+  }
+  if (projection == ProjectionMethod::kQuadrature && !quadrature_rule) {
+    throw std::invalid_argument(
+        "collocation design: quadrature projection needs a quadrature rule "
+        "(gauss or smolyak), not " +
+        toString(sequence));
+  }
+  projection_ = projection;
+  if (sequence == PointSequence::kSmolyak && projection == ProjectionMethod::kQuadrature &&
+      count < basis.order()) {
+    std::ostringstream msg;
+    msg << "collocation design: smolyak level " << count << " integrates total degree "
+        << smolyakExactDegree(count) << " exactly, the quadrature projection of order "
+        << basis.order() << " needs degree " << 2 * basis.order() << " (level >= " << basis.order()
+        << ", or projection: regression)";
+    throw std::invalid_argument(msg.str());
   }
   // For the Gauss rule `count` is per dimension; compare the total to S before
   // building anything (count^n could be huge only for absurd configurations).
   double q_total = 1.0;
   for (int d = 0; d < (sequence == PointSequence::kGauss ? n : 1); ++d) q_total *= count;
-  if (q_total < s) {
+  if (sequence != PointSequence::kSmolyak && q_total < s) {
     std::ostringstream msg;
     msg << "collocation design degenerate: Q = " << q_total << " points < S = " << s
         << " basis terms (" << toString(sequence) << ", order " << basis.order() << " in " << n
@@ -59,12 +118,26 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
     case PointSequence::kGauss:
       basis.tensorGaussRule(count, &points_, &weights);
       break;
+    case PointSequence::kSmolyak: {
+      SparseGridRule rule = smolyakRule(familiesOf(basis), count);
+      points_ = std::move(rule.nodes);
+      weights = std::move(rule.weights);
+      if (points_.rows() < s) {
+        std::ostringstream msg;
+        msg << "collocation design degenerate: smolyak level " << count
+            << " has Q = " << points_.rows() << " points < S = " << s << " basis terms (order "
+            << basis.order() << " in " << n << " germs); raise collocation.level";
+        throw std::invalid_argument(msg.str());
+      }
+      break;
+    }
   }
   design_ = basis.evaluate(points_);
 
   // For the Gauss rule the relevant matrix is W^(1/2) A (orthonormal columns when
   // the rule integrates degree 2p exactly); A alone is ill-conditioned merely
-  // because tail nodes carry tiny weights.
+  // because tail nodes carry tiny weights. Sparse-grid weights can be negative:
+  // there A itself (the regression matrix) is checked.
   const Eigen::MatrixXd conditioned =
       sequence == PointSequence::kGauss
           ? Eigen::MatrixXd(weights.cwiseSqrt().asDiagonal() * design_)
@@ -80,15 +153,46 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
     throw std::invalid_argument(msg.str());
   }
 
-  if (sequence == PointSequence::kGauss) {
-    // Discrete projection c_j = sum_q w_q f(xi_q) psi_j(xi_q): exact for f of
-    // degree <= 2 count - 1 - p per variable, no linear solve needed.
+  // Least-squares pseudo-inverse, computed once from a rank-revealing
+  // factorisation (never the normal equations, which square cond(A)).
+  Eigen::MatrixXd least_squares =
+      Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(design_).pseudoInverse();
+  if (projection_ == ProjectionMethod::kQuadrature) {
+    // Discrete projection c_j = sum_q w_q f(xi_q) psi_j(xi_q): for Gauss exact
+    // for f of degree <= 2 count - 1 - p per variable, no linear solve needed.
     projector_ = design_.transpose() * weights.asDiagonal();
+    ls_projector_ = std::move(least_squares);
   } else {
-    // Least-squares pseudo-inverse, computed once from a rank-revealing
-    // factorisation (never the normal equations, which square cond(A)).
-    projector_ = Eigen::CompleteOrthogonalDecomposition<Eigen::MatrixXd>(design_).pseudoInverse();
+    projector_ = std::move(least_squares);
   }
+  // Hat matrix diagonal h_qq = (A A^+)_qq; Q = S (interpolation) leaves no
+  // point out, so no leave-one-out error.
+  const Eigen::MatrixXd& pinv = ls_projector_.size() > 0 ? ls_projector_ : projector_;
+  hat_diagonal_ = (design_.array() * pinv.transpose().array()).rowwise().sum();
+  if ((hat_diagonal_.array() < 1.0 - 1e-10).all()) {
+    loo_scale_ = (1.0 - hat_diagonal_.array()).inverse();
+  }
+}
+
+Eigen::VectorXd CollocationDesign::leaveOneOutError(const Eigen::MatrixXd& values) const {
+  if (!hasLeaveOneOut()) return Eigen::VectorXd();
+  if (values.cols() != pointCount()) {
+    throw std::invalid_argument("leaveOneOutError: values have " + std::to_string(values.cols()) +
+                                " columns for " + std::to_string(pointCount()) + " points");
+  }
+  const Eigen::MatrixXd& pinv = ls_projector_.size() > 0 ? ls_projector_ : projector_;
+  const Eigen::MatrixXd fitted = (values * pinv.transpose()) * design_.transpose();
+  const Eigen::ArrayXXd loo = (values - fitted).array().rowwise() * loo_scale_.transpose().array();
+  Eigen::VectorXd out(values.rows());
+  for (Eigen::Index i = 0; i < values.rows(); ++i) {
+    const double spread = (values.row(i).array() - values.row(i).mean()).square().sum();
+    const double err = loo.row(i).square().sum();
+    // Values equal at every point (e.g. at rest) fit exactly: no error to report,
+    // whatever rounding leaves in the residual.
+    const double floor = 1e-24 * values.row(i).squaredNorm();
+    out(i) = spread > floor ? std::sqrt(err / spread) : 0.0;
+  }
+  return out;
 }
 
 }  // namespace pc_ekf

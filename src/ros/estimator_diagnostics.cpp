@@ -121,7 +121,7 @@ void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrap
   const HealthStatus& h = u.health;
   if (u.non_finite || h.non_finite || h.forecast_failed) {
     s.summary(DiagnosticStatus::ERROR, "filter diverged: " + joined(u.warnings));
-  } else if (!u.healthy || h.support_exceeded) {
+  } else if (!u.healthy || h.support_exceeded || h.loo_exceeded) {
     s.summary(DiagnosticStatus::WARN, joined(u.warnings));
   } else {
     s.summary(DiagnosticStatus::OK, "healthy");
@@ -139,6 +139,14 @@ void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrap
   s.add("forecast failed", h.forecast_failed);
   s.add("band nested (informational)", h.band_nested);
   s.add("coherence flagged", u.coherence_flagged);
+  const std::vector<std::string>& channels = config_.model_type->channelNames();
+  for (Eigen::Index i = 0; i < h.loo_error.size(); ++i) {
+    const std::string name =
+        i < static_cast<Eigen::Index>(channels.size()) ? channels[i] : std::to_string(i);
+    s.add("projection loo error " + name, h.loo_error[i]);
+  }
+  s.add("projection loo warning threshold", config_.collocation.loo_warning);
+  s.add("projection loo exceeded", h.loo_exceeded);
   s.add("healthy", u.healthy);
 }
 

@@ -314,6 +314,9 @@ void setHealth(ParameterEstimate& msg, const HealthStatus& h, int nis_channels,
   msg.non_finite = h.non_finite;
   msg.forecast_failed = h.forecast_failed;
   msg.band_nested = h.band_nested;
+  msg.loo_error = toStd(h.loo_error);
+  msg.loo_warning = settings.loo_warning;
+  msg.loo_exceeded = h.loo_exceeded;
   msg.healthy = h.healthy() && !msg.coherence_flagged;
   msg.warnings = h.warnings();
   if (msg.coherence_flagged) msg.warnings.push_back(coherenceWarning(msg));

@@ -33,25 +33,31 @@ EstimatorConfig scalingConfig(int n, int p) {
   return c;
 }
 
+// Per sample of the first `samples`, the best over `passes` runs of the
+// one-step filter from the prior of the time `clock` measures for its update.
+std::vector<double> bestStepTimes(const Scenario& s, int samples, int passes, double (*clock)()) {
+  OneStepFilter filter(s.propagator, makeOneStepSettings(s.config));
+  std::vector<double> best(samples, INFINITY);
+  for (int pass = 0; pass < passes; ++pass) {
+    filter.reset();
+    for (int k = 0; k < samples; ++k) {
+      const double t0 = clock();
+      const StepResult r = filter.process(s.series[k]);
+      best[k] = std::min(best[k], clock() - t0);
+      benchmark::DoNotOptimize(r.mean.data());
+    }
+  }
+  return best;
+}
+
 // Median and p99 over the samples of the best-of-passes CPU time per update.
 void BM_UpdateScaling(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0)), p = static_cast<int>(state.range(1));
   const Scenario s = makeScenario(scalingConfig(n, p));
   const int samples = 20;  // the first 0.6 s: the bump, the expensive part
   const int passes = s.propagator->termCount() > 200 ? 2 : 5;
-  OneStepFilter filter(s.propagator, makeOneStepSettings(s.config));
-  std::vector<double> best(samples, INFINITY);
-  for (auto _ : state) {
-    for (int pass = 0; pass < passes; ++pass) {
-      filter.reset();
-      for (int k = 0; k < samples; ++k) {
-        const double c0 = threadCpuSeconds();
-        const StepResult r = filter.process(s.series[k]);
-        best[k] = std::min(best[k], threadCpuSeconds() - c0);
-        benchmark::DoNotOptimize(r.mean.data());
-      }
-    }
-  }
+  std::vector<double> best;
+  for (auto _ : state) best = bestStepTimes(s, samples, passes, threadCpuSeconds);
   state.counters["n"] = n;
   state.counters["p"] = p;
   state.counters["S"] = s.propagator->termCount();
@@ -62,6 +68,74 @@ void BM_UpdateScaling(benchmark::State& state) {
 BENCHMARK(BM_UpdateScaling)
     ->ArgsProduct({{2, 3, 4}, {2, 3, 4, 5, 6, 7, 8}})
     ->Iterations(1)->Unit(benchmark::kMillisecond);
+
+// One-step update (square root, dt = 0.03 s, the bump's first 0.6 s) with n
+// uncertain roll-plane parameters (bench_support.h), p = scalingOrder(n), on
+// `threads` threads. Design 0: Smolyak sparse grid of level p (least squares
+// on its nodes, the default projection); 1: Q = 2S Halton points. Wall time per sample
+// (the workers' time counts), best of the passes, median over the samples.
+void BM_ManyParameters(benchmark::State& state) {
+  const int n = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
+  const bool halton = state.range(2) == 1;
+  const int p = scalingOrder(n);
+  const EstimatorConfig c =
+      halton ? manyParameterConfig(n, p, PointSequence::kHalton, 2 * basisTerms(n, p), threads)
+             : manyParameterConfig(n, p, PointSequence::kSmolyak, p, threads);
+  const Scenario s = makeScenario(c);
+  const int samples = 20;
+  std::vector<double> best;
+  for (auto _ : state) best = bestStepTimes(s, samples, 8, wallSeconds);
+  const double dt = s.config.sampling.duration / s.config.sampling.samples;
+  state.counters["n"] = n;
+  state.counters["p"] = p;
+  state.counters["S"] = s.propagator->termCount();
+  state.counters["Q"] = s.propagator->design().pointCount();
+  state.counters["smolyak"] = halton ? 0 : 1;
+  state.counters["threads"] = s.propagator->threads();
+  state.counters["median_us"] = 1e6 * quantile(best, 0.5);
+  state.counters["p99_us"] = 1e6 * quantile(best, 0.99);
+  state.counters["real_time_factor"] = dt / quantile(best, 0.5);
+}
+BENCHMARK(BM_ManyParameters)
+    ->ArgsProduct({{2, 3, 4, 6, 8}, {1, 2}, {0, 1}})
+    ->Iterations(1)
+    ->Unit(benchmark::kMillisecond);
+
+// The forecast alone (the first 20 sample intervals from the prior) on 1 and
+// 2 threads in the same run, for designs with Q >= 100: speedup = t1 / t2.
+// Arg 0: n = 4, p = 4, Q = 2S = 140 Halton; 1: n = 8, p = 2 sparse grid (Q = 145).
+void BM_ForecastThreads(benchmark::State& state) {
+  const bool sparse = state.range(0) == 1;
+  double t[2] = {INFINITY, INFINITY};
+  int q = 0;
+  for (auto _ : state) {
+    for (int threads = 1; threads <= 2; ++threads) {
+      const EstimatorConfig c =
+          sparse ? manyParameterConfig(8, 2, PointSequence::kSmolyak, 2, threads)
+                 : manyParameterConfig(4, 4, PointSequence::kHalton, 140, threads);
+      const Scenario s = makeScenario(c);
+      q = s.propagator->design().pointCount();
+      const Eigen::MatrixXd prior = s.propagator->priorState();
+      t[threads - 1] = bestOf(
+          10,
+          [&] {
+            Eigen::MatrixXd x = prior;
+            double t0 = 0.0;
+            for (int k = 0; k < 20; ++k) {
+              s.propagator->forecast(x, t0, s.series[k].time);
+              t0 = s.series[k].time;
+            }
+            benchmark::DoNotOptimize(x.data());
+          },
+          wallSeconds);
+    }
+  }
+  state.counters["Q"] = q;
+  state.counters["one_thread_us_per_interval"] = 1e6 * t[0] / 20;
+  state.counters["two_threads_us_per_interval"] = 1e6 * t[1] / 20;
+  state.counters["speedup"] = t[0] / t[1];
+}
+BENCHMARK(BM_ForecastThreads)->Arg(0)->Arg(1)->Iterations(1)->Unit(benchmark::kMillisecond);
 
 // Whole-set update (paper rule for one pass is the same cost; the config's
 // square-root rule is used) for N samples over 3 s.

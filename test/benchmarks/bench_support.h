@@ -48,6 +48,40 @@ inline EstimatorConfig paperConfig(int samples, Integration integration = Integr
   return c;
 }
 
+// Roll-plane parameters declared uncertain beyond M and d_CG (+-10 %, truth at
+// xi = 0.1), in this order, for n = 3..8 uncertain parameters.
+inline std::vector<std::string> extraUncertainNames(int n) {
+  static const std::vector<std::string> names = {"spring_linear_left",  "spring_linear_right",
+                                                 "damping_left",        "damping_right",
+                                                 "tyre_stiffness_left", "tyre_stiffness_right"};
+  return {names.begin(), names.begin() + std::max(0, std::min<int>(n - 2, names.size()))};
+}
+
+// The paper's case with n uncertain parameters, PC order p and a design:
+// kSmolyak takes `count` as its level, kGauss as nodes per germ, the others as Q.
+inline EstimatorConfig manyParameterConfig(int n, int p, PointSequence sequence, int count,
+                                           int threads = 1, int samples = 100) {
+  EstimatorConfig c = withUncertain(paperConfig(samples), extraUncertainNames(n), 0.1, 0.1);
+  c.pc_order = p;
+  c.collocation.sequence = sequence;
+  c.collocation.points = count;
+  c.collocation.level = count;
+  c.collocation.threads = threads;
+  return c;
+}
+
+// Order p of the scaling table per number n of uncertain parameters: the
+// highest whose sparse grid (level p, exact to degree 2p + 1) keeps the
+// one-step update far above real time on two cores.
+inline int scalingOrder(int n) { return n <= 2 ? 4 : n == 3 ? 3 : 2; }
+
+// S = C(n + p, p).
+inline int basisTerms(int n, int p) {
+  long r = 1;
+  for (int i = 1; i <= p; ++i) r = r * (n + i) / i;
+  return static_cast<int>(r);
+}
+
 struct Scenario {
   EstimatorConfig config;
   std::shared_ptr<const MechanicalModel> model;

@@ -102,6 +102,33 @@ TEST(Config, TooFewCollocationPointsAreRefusedNamingTheKey) {
                                         kMinimal, "ok.yaml"));
 }
 
+TEST(Config, SparseGridKeys) {
+  const EstimatorConfig c = parseConfigString(
+      std::string(
+          "pc: {order: 3}\ncollocation: {sequence: smolyak, threads: 2, loo_warning: 0.05}\n") +
+          kMinimal,
+      "ok.yaml");
+  EXPECT_EQ(c.collocation.sequence, PointSequence::kSmolyak);
+  EXPECT_EQ(c.collocation.designCount(c.pc_order), 3);  // level defaults to the order
+  EXPECT_EQ(c.collocation.threads, 2);
+  EXPECT_DOUBLE_EQ(c.collocation.loo_warning, 0.05);
+  EXPECT_EQ(parseConfigString(
+                std::string("collocation: {sequence: smolyak, level: 5}\n") + kMinimal, "ok.yaml")
+                .collocation.designCount(4),
+            5);
+  // The quadrature projection needs level >= order; halton has no quadrature.
+  std::string e =
+      errorOf(std::string("collocation: {sequence: smolyak, level: 3, projection: quadrature}\n") +
+              kMinimal);
+  EXPECT_NE(e.find("collocation.level"), std::string::npos) << e;
+  e = errorOf(std::string("collocation: {projection: quadrature}\n") + kMinimal);
+  EXPECT_NE(e.find("collocation.projection"), std::string::npos) << e;
+  e = errorOf(std::string("collocation: {projection: lsq}\n") + kMinimal);
+  EXPECT_NE(e.find("collocation.projection"), std::string::npos) << e;
+  e = errorOf(std::string("collocation: {threads: -1}\n") + kMinimal);
+  EXPECT_NE(e.find("collocation.threads"), std::string::npos) << e;
+}
+
 TEST(Config, BadValuesAreRefusedNamingTheKey) {
   EXPECT_NE(errorOf(std::string("road: {source: gravel}\n") + kMinimal).find("road.source"),
             std::string::npos);
