@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "pc_ekf/filter/small_product.h"
+
 namespace pc_ekf {
 
 void ForecastReport::merge(const ForecastReport& o) {
@@ -29,7 +31,7 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
       mapping_(std::move(mapping)),
       settings_(settings) {
   const int wanted = threads <= 0 ? ColumnWorkers::defaultThreads() : threads;
-  if (wanted > 1 && design_.pointCount() >= 3 * kMinPointsPerPart) {
+  if (wanted > 1 && design_.pointCount() >= kBlockedPoints) {
     workers_ = std::make_shared<ColumnWorkers>(wanted);
   }
   if (design_.termCount() != basis_.size()) {
@@ -103,54 +105,6 @@ struct ForecastWork {
   std::vector<Eigen::Index> cols;
 };
 
-// dst (m x n, column-major) = a (m x k, column-major, leading dimension m) * b,
-// b(l, j) = b[l * b_row_stride + j * b_col_stride]: the per-sample products
-// X A^T and Y P^T (m = 8 to 12 rows: the column of dst stays in registers),
-// where Eigen's blocked GEMM spends more on packing than on arithmetic.
-template <int M>
-__attribute__((always_inline)) inline void smallProductRows(
-    const double* __restrict a, const double* __restrict b, Eigen::Index b_row_stride,
-    Eigen::Index b_col_stride, double* __restrict dst, Eigen::Index k, Eigen::Index n) {
-  for (Eigen::Index j = 0; j < n; ++j) {
-    double acc[M] = {};
-    for (Eigen::Index l = 0; l < k; ++l) {
-      const double blj = b[l * b_row_stride + j * b_col_stride];
-      for (int i = 0; i < M; ++i) acc[i] += a[l * M + i] * blj;
-    }
-    for (int i = 0; i < M; ++i) dst[j * M + i] = acc[i];
-  }
-}
-
-// Compiled for x86-64-v3 and the baseline.
-__attribute__((target_clones("arch=x86-64-v3", "default"))) void smallProduct(
-    const double* __restrict a, const double* __restrict b, Eigen::Index b_row_stride,
-    Eigen::Index b_col_stride, double* __restrict dst, Eigen::Index m, Eigen::Index k,
-    Eigen::Index n) {
-  switch (m) {
-    case 8: return smallProductRows<8>(a, b, b_row_stride, b_col_stride, dst, k, n);
-    case 9: return smallProductRows<9>(a, b, b_row_stride, b_col_stride, dst, k, n);
-    case 10: return smallProductRows<10>(a, b, b_row_stride, b_col_stride, dst, k, n);
-    case 11: return smallProductRows<11>(a, b, b_row_stride, b_col_stride, dst, k, n);
-    case 12: return smallProductRows<12>(a, b, b_row_stride, b_col_stride, dst, k, n);
-    default: break;
-  }
-  for (Eigen::Index j = 0; j < n; ++j) {
-    double* __restrict d = dst + j * m;
-    for (Eigen::Index i = 0; i < m; ++i) d[i] = 0.0;
-    for (Eigen::Index l = 0; l < k; ++l) {
-      const double blj = b[l * b_row_stride + j * b_col_stride];
-      const double* __restrict al = a + l * m;
-      for (Eigen::Index i = 0; i < m; ++i) d[i] += al[i] * blj;
-    }
-  }
-}
-
-// All entries finite, in one vectorised pass (x * 0 is NaN for NaN and +-Inf).
-template <typename Derived>
-bool finite(const Eigen::DenseBase<Derived>& m) {
-  return std::isfinite((m.derived().array() * 0.0).sum());
-}
-
 }  // namespace
 
 ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) const {
@@ -158,6 +112,7 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
   report.points = design_.pointCount();
   if (t1 < t0) throw std::invalid_argument("forecast: t1 < t0");
   if (t1 == t0) return report;
+  if (design_.pointCount() >= kBlockedPoints && forecastInBlocks(x, t0, t1, &report)) return report;
   const int ns = stateCount(), np = parameterCount();
   const Eigen::Index q_count = design_.pointCount();
   thread_local ForecastWork w;
@@ -177,7 +132,7 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
   w.reasons.resize(q_count);
   w.usable.assign(q_count, true);
   w.cols.clear();
-  const bool all_finite = finite(params) && finite(w.at_points.topRows(ns));
+  const bool all_finite = allFiniteFast(params) && allFiniteFast(w.at_points.topRows(ns));
   for (Eigen::Index q = 0; q < q_count; ++q) {
     w.reasons[q] = model_->invalidReason(params.col(q));
     if (w.reasons[q].empty() &&
@@ -222,7 +177,7 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
     integrate(*model_, *batch, t0, t1, w.y, settings_);
     integrations_ += static_cast<long>(valid);
   }
-  const bool integrated_finite = finite(w.y);
+  const bool integrated_finite = allFiniteFast(w.y);
   for (Eigen::Index i = 0; i < valid && !integrated_finite; ++i) {
     if (w.y.col(i).allFinite()) continue;
     w.usable[w.cols[i]] = false;

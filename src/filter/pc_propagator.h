@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -37,7 +38,8 @@ class PcPropagator {
  public:
   // threads: the forecast integrates the collocation points on this many
   // threads (<= 0: the machine's cores); the result is bitwise the same for
-  // any count (each point's integration is independent of the others').
+  // any count (each point's integration is independent of the others', and
+  // designs of kBlockedPoints or more sum over points in fixed blocks).
   PcPropagator(std::shared_ptr<const MechanicalModel> model, const PolynomialBasis& basis,
                const CollocationDesign& design, ParameterMapping mapping,
                IntegratorSettings settings, int threads = 1);
@@ -71,8 +73,22 @@ class PcPropagator {
   // taken by whichever thread is free): below it the hand-off costs more than
   // it saves. Designs under 3 parts' worth stay on one thread.
   static constexpr long kMinPointsPerPart = 16;
+  // Designs of this size or more take the blocked forecast on any thread
+  // count (one thread included, so that every count gives the same bits).
+  static constexpr long kBlockedPoints = 3 * kMinPointsPerPart;
+  // Points per block of the blocked forecast's sums (a SIMD multiple).
+  static constexpr long kBlock = 16;
 
  private:
+  // The forecast with every per-point step (X A^T, preparation, integration,
+  // the products with P and the leave-one-out residuals) split among the
+  // threads and the sums over points taken per block of kBlock points, the
+  // blocks added in order. False, x untouched, when some point is not usable
+  // (the general path then drops it).
+  bool forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1, ForecastReport* report) const;
+  void runParts(const std::vector<long>& bounds,
+                const std::function<void(int, long, long)>& job) const;
+
   std::shared_ptr<const MechanicalModel> model_;
   PolynomialBasis basis_;
   CollocationDesign design_;

@@ -167,7 +167,7 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
   }
   // Hat matrix diagonal h_qq = (A A^+)_qq; Q = S (interpolation) leaves no
   // point out, so no leave-one-out error.
-  const Eigen::MatrixXd& pinv = ls_projector_.size() > 0 ? ls_projector_ : projector_;
+  const Eigen::MatrixXd& pinv = leastSquaresProjector();
   hat_diagonal_ = (design_.array() * pinv.transpose().array()).rowwise().sum();
   if ((hat_diagonal_.array() < 1.0 - 1e-10).all()) {
     loo_scale_ = (1.0 - hat_diagonal_.array()).inverse();
@@ -180,7 +180,7 @@ Eigen::VectorXd CollocationDesign::leaveOneOutError(const Eigen::MatrixXd& value
     throw std::invalid_argument("leaveOneOutError: values have " + std::to_string(values.cols()) +
                                 " columns for " + std::to_string(pointCount()) + " points");
   }
-  const Eigen::MatrixXd& pinv = ls_projector_.size() > 0 ? ls_projector_ : projector_;
+  const Eigen::MatrixXd& pinv = leastSquaresProjector();
   const Eigen::MatrixXd fitted = (values * pinv.transpose()) * design_.transpose();
   const Eigen::ArrayXXd loo = (values - fitted).array().rowwise() * loo_scale_.transpose().array();
   Eigen::VectorXd out(values.rows());

@@ -69,6 +69,12 @@ class CollocationDesign {
   // truncation error. Empty when unavailable (Q = S: every h_qq = 1).
   Eigen::VectorXd leaveOneOutError(const Eigen::MatrixXd& values) const;
   bool hasLeaveOneOut() const { return loo_scale_.size() > 0; }
+  // Pieces of leaveOneOutError for callers that sum over the points
+  // themselves: the pseudo-inverse of A (S x Q) and 1 / (1 - h_qq).
+  const Eigen::MatrixXd& leastSquaresProjector() const {
+    return ls_projector_.size() > 0 ? ls_projector_ : projector_;
+  }
+  const Eigen::VectorXd& leaveOneOutScale() const { return loo_scale_; }
   const Eigen::VectorXd& hatDiagonal() const { return hat_diagonal_; }
 
  private:

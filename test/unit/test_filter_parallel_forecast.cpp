@@ -1,5 +1,6 @@
 // The forecast on several threads equals the one-thread forecast bit for bit
-// (each collocation point is integrated independently of the others).
+// (each collocation point is integrated independently of the others, and the
+// sums over points are taken per fixed block, blocks added in order).
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -18,8 +19,14 @@ bool bitwiseEqual(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
          std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
 
-// Filter states after every sample of the first 0.6 s (the bump) with `threads`.
-std::vector<Eigen::MatrixXd> run(EstimatorConfig c, int threads, int* used_threads) {
+bool bitwiseEqual(const Eigen::VectorXd& a, const Eigen::VectorXd& b) {
+  return a.size() == b.size() && std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+
+// Filter states after every sample of the first 0.6 s (the bump) with
+// `threads`; the leave-one-out errors of the forecasts in *loo.
+std::vector<Eigen::MatrixXd> run(EstimatorConfig c, int threads, int* used_threads,
+                                 std::vector<Eigen::VectorXd>* loo) {
   c.collocation.threads = threads;
   c.sampling.samples = 100;  // 0.03 s apart
   const auto model = makeModel(c, makeRoad(c));
@@ -32,17 +39,20 @@ std::vector<Eigen::MatrixXd> run(EstimatorConfig c, int threads, int* used_threa
     const StepResult r = filter.process(data[k]);
     states.push_back(filter.state());
     EXPECT_EQ(r.forecast.loo_error.size(), 4);
+    loo->push_back(r.forecast.loo_error);
   }
   return states;
 }
 
 void expectThreadCountInvariant(const EstimatorConfig& c) {
   int one = 0;
-  const std::vector<Eigen::MatrixXd> reference = run(c, 1, &one);
+  std::vector<Eigen::VectorXd> reference_loo;
+  const std::vector<Eigen::MatrixXd> reference = run(c, 1, &one, &reference_loo);
   ASSERT_EQ(one, 1);
   for (int threads : {2, 3}) {
     int used = 0;
-    const std::vector<Eigen::MatrixXd> states = run(c, threads, &used);
+    std::vector<Eigen::VectorXd> loo;
+    const std::vector<Eigen::MatrixXd> states = run(c, threads, &used, &loo);
     EXPECT_EQ(used, threads);
     ASSERT_EQ(states.size(), 20u);
     ASSERT_EQ(states.size(), reference.size());
@@ -50,6 +60,8 @@ void expectThreadCountInvariant(const EstimatorConfig& c) {
       EXPECT_TRUE(bitwiseEqual(states[k], reference[k]))
           << threads << " threads, sample " << k + 1 << ": max difference "
           << (states[k] - reference[k]).cwiseAbs().maxCoeff();
+      EXPECT_TRUE(bitwiseEqual(loo[k], reference_loo[k]))
+          << threads << " threads, sample " << k + 1;
     }
   }
 }
@@ -69,6 +81,38 @@ TEST(ParallelForecast, SparseGridBitwiseEqualToOneThread) {
   c.collocation.sequence = PointSequence::kSmolyak;
   c.collocation.level = 2;
   expectThreadCountInvariant(c);
+}
+
+// The blocked sums equal the direct products: X A^T, integration, Y P^T and
+// CollocationDesign::leaveOneOutError of H Y, to rounding.
+TEST(ParallelForecast, BlockedForecastEqualsDirectProducts) {
+  EstimatorConfig c = withUncertain(loadConfigFile(kConfig),
+                                    {"spring_linear_left", "spring_linear_right"}, 0.1, 0.1);
+  c.collocation.points = 141;
+  c.collocation.threads = 2;
+  const auto model = makeModel(c, makeRoad(c));
+  const auto propagator = makePropagator(c, model);
+  ASSERT_GE(propagator->design().pointCount(), PcPropagator::kBlockedPoints);
+  const int ns = propagator->stateCount(), np = propagator->parameterCount();
+  Eigen::MatrixXd x = propagator->priorState();
+  // Start off rest so that every channel varies over the points.
+  x.topRows(ns).col(0).setConstant(0.01);
+  x.topRows(ns).col(1).setConstant(0.002);
+  const CollocationDesign& design = propagator->design();
+  const Eigen::MatrixXd params = propagator->parametersAtPoints(x.bottomRows(np), nullptr);
+  Eigen::ArrayXXd y = (x.topRows(ns) * design.designMatrix().transpose()).array();
+  integrate(*model, *model->prepare(params), 0.0, 0.05, y, propagator->integration());
+  const Eigen::MatrixXd expected = y.matrix() * design.projector().transpose();
+  const Eigen::VectorXd expected_loo =
+      design.leaveOneOutError(model->observationMatrix() * y.matrix());
+
+  const ForecastReport r = propagator->forecast(x, 0.0, 0.05);
+  ASSERT_TRUE(r.ok);
+  EXPECT_LE((x.topRows(ns) - expected).cwiseAbs().maxCoeff(),
+            1e-12 * expected.cwiseAbs().maxCoeff());
+  ASSERT_EQ(r.loo_error.size(), expected_loo.size());
+  EXPECT_GT(expected_loo.minCoeff(), 0.0);
+  EXPECT_LE((r.loo_error - expected_loo).cwiseAbs().maxCoeff(), 1e-10 * expected_loo.maxCoeff());
 }
 
 TEST(ParallelForecast, SmallDesignsStayOnOneThread) {
