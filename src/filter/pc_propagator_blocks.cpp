@@ -18,7 +18,7 @@ struct BlockWork {
   Eigen::ArrayXXd y;             // states x Q, integrated
   Eigen::MatrixXd z;             // channels x Q: H y
   Eigen::MatrixXd state_sums;    // states x (S blocks): Y_b P_b^T of block b
-  Eigen::MatrixXd channel_sums;  // channels x (S blocks): Z_b pinv(A)_b^T
+  Eigen::MatrixXd channel_sums;  // channels x (S blocks): Z_b pinv(A)_b^T (quadrature)
   // channels x blocks: sum z, sum z^2, sum of squared leave-one-out errors,
   // sum (z - mean)^2.
   Eigen::MatrixXd sum, sum_sq, err_sq, spread;
@@ -58,6 +58,9 @@ bool PcPropagator::forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1,
   const Eigen::VectorXd& loo_scale = design_.leaveOneOutScale();
   const Eigen::MatrixXd& h = model_->observationMatrix();
   const bool loo = design_.hasLeaveOneOut();
+  // The projector is the pseudo-inverse: the channels' fit is H times the
+  // states' coefficients, no second sum over the points.
+  const bool regression = &pinv == &projector;
   const Eigen::Index nz = loo ? h.rows() : 0;
   const Eigen::VectorXd& nominal = model_->nominalParameters();
 
@@ -68,7 +71,7 @@ bool PcPropagator::forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1,
   w.y.resize(ns, q_count);
   w.state_sums.resize(ns, s_count * blocks);
   w.z.resize(nz, q_count);
-  w.channel_sums.resize(nz, s_count * blocks);
+  w.channel_sums.resize(nz, regression ? 0 : s_count * blocks);
   for (Eigen::MatrixXd* m : {&w.sum, &w.sum_sq, &w.err_sq, &w.spread}) m->resize(nz, blocks);
   // Parts of whole blocks: two per thread, taken by whichever thread is free.
   const std::vector<long> block_bounds =
@@ -115,8 +118,10 @@ bool PcPropagator::forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1,
                    work.state_sums.data() + b * s_count * ns, ns, nq, s_count);
       if (!loo) continue;
       smallProduct(h.data(), &work.y(0, q0), 1, ns, &work.z(0, q0), nz, ns, nq);
-      smallProduct(&work.z(0, q0), pinv.data() + q0 * s_count, s_count, 1,
-                   work.channel_sums.data() + b * s_count * nz, nz, nq, s_count);
+      if (!regression) {
+        smallProduct(&work.z(0, q0), pinv.data() + q0 * s_count, s_count, 1,
+                     work.channel_sums.data() + b * s_count * nz, nz, nq, s_count);
+      }
       for (Eigen::Index i = 0; i < nz; ++i) {
         double sum = 0.0, sum_sq = 0.0;
         for (Eigen::Index q = q0; q < q0 + nq; ++q) {
@@ -140,8 +145,13 @@ bool PcPropagator::forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1,
   if (!loo) return true;
 
   // Leave-one-out error from the fit of z (as CollocationDesign::leaveOneOutError).
-  w.coeffs = block(w.channel_sums, nz, 0);
-  for (Eigen::Index b = 1; b < blocks; ++b) w.coeffs += block(w.channel_sums, nz, b);
+  if (regression) {
+    w.coeffs.resize(nz, s_count);
+    smallProduct(h.data(), x.data(), 1, x.rows(), w.coeffs.data(), nz, ns, s_count);
+  } else {
+    w.coeffs = block(w.channel_sums, nz, 0);
+    for (Eigen::Index b = 1; b < blocks; ++b) w.coeffs += block(w.channel_sums, nz, b);
+  }
   w.mean = sumOfBlocks(w.sum).array() / static_cast<double>(q_count);
   runParts(w.bounds, [&](int, long begin, long end) {
     thread_local Eigen::MatrixXd fitted;

@@ -18,6 +18,28 @@ __attribute__((always_inline)) inline void smallProductRows(
   }
 }
 
+// Four rows (the measured channels): one column's sums form one chain of
+// dependent additions, so four columns are summed side by side. Each column
+// is still summed over l in order.
+__attribute__((always_inline)) inline void smallProductFourRows(
+    const double* __restrict a, const double* __restrict b, Eigen::Index b_row_stride,
+    Eigen::Index b_col_stride, double* __restrict dst, Eigen::Index k, Eigen::Index n) {
+  Eigen::Index j = 0;
+  for (; j + 4 <= n; j += 4) {
+    double acc[4][4] = {};
+    for (Eigen::Index l = 0; l < k; ++l) {
+      for (int c = 0; c < 4; ++c) {
+        const double blj = b[l * b_row_stride + (j + c) * b_col_stride];
+        for (int i = 0; i < 4; ++i) acc[c][i] += a[l * 4 + i] * blj;
+      }
+    }
+    for (int c = 0; c < 4; ++c) {
+      for (int i = 0; i < 4; ++i) dst[(j + c) * 4 + i] = acc[c][i];
+    }
+  }
+  smallProductRows<4>(a, b + j * b_col_stride, b_row_stride, b_col_stride, dst + j * 4, k, n - j);
+}
+
 }  // namespace
 
 // Compiled for x86-64-v3 and the baseline.
@@ -26,6 +48,7 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void smallProduct(
     Eigen::Index b_col_stride, double* __restrict dst, Eigen::Index m, Eigen::Index k,
     Eigen::Index n) {
   switch (m) {
+    case 4: return smallProductFourRows(a, b, b_row_stride, b_col_stride, dst, k, n);
     case 8: return smallProductRows<8>(a, b, b_row_stride, b_col_stride, dst, k, n);
     case 9: return smallProductRows<9>(a, b, b_row_stride, b_col_stride, dst, k, n);
     case 10: return smallProductRows<10>(a, b, b_row_stride, b_col_stride, dst, k, n);

@@ -85,10 +85,7 @@ TEST(ParallelForecast, SparseGridBitwiseEqualToOneThread) {
 
 // The blocked sums equal the direct products: X A^T, integration, Y P^T and
 // CollocationDesign::leaveOneOutError of H Y, to rounding.
-TEST(ParallelForecast, BlockedForecastEqualsDirectProducts) {
-  EstimatorConfig c = withUncertain(loadConfigFile(kConfig),
-                                    {"spring_linear_left", "spring_linear_right"}, 0.1, 0.1);
-  c.collocation.points = 141;
+void expectBlockedForecastEqualsDirectProducts(EstimatorConfig c) {
   c.collocation.threads = 2;
   const auto model = makeModel(c, makeRoad(c));
   const auto propagator = makePropagator(c, model);
@@ -113,6 +110,20 @@ TEST(ParallelForecast, BlockedForecastEqualsDirectProducts) {
   ASSERT_EQ(r.loo_error.size(), expected_loo.size());
   EXPECT_GT(expected_loo.minCoeff(), 0.0);
   EXPECT_LE((r.loo_error - expected_loo).cwiseAbs().maxCoeff(), 1e-10 * expected_loo.maxCoeff());
+}
+
+TEST(ParallelForecast, BlockedForecastEqualsDirectProducts) {
+  // Regression (the projector is A's pseudo-inverse).
+  EstimatorConfig c = withUncertain(loadConfigFile(kConfig),
+                                    {"spring_linear_left", "spring_linear_right"}, 0.1, 0.1);
+  c.collocation.points = 141;
+  expectBlockedForecastEqualsDirectProducts(c);
+  // Quadrature projection (7 x 7 Gauss nodes): the leave-one-out fit sums
+  // over the points itself.
+  c = loadConfigFile(kConfig);
+  c.collocation.sequence = PointSequence::kGauss;
+  c.collocation.points = 7;
+  expectBlockedForecastEqualsDirectProducts(c);
 }
 
 TEST(ParallelForecast, SmallDesignsStayOnOneThread) {
