@@ -120,12 +120,12 @@ details = {
         for k, b in propagation.items() if k.startswith("BM_DesignCurve")],
     "design_default": propagation.get("BM_DesignDefault/iterations:1", {}),
     "many_parameters": [
-        {c: b.get(c) for c in ("n", "p", "S", "Q", "smolyak", "threads", "median_us", "p99_us",
-                               "real_time_factor")}
+        {c: b.get(c) for c in ("n", "p", "S", "Q", "smolyak", "q_norm", "threads", "median_us",
+                               "p99_us", "real_time_factor")}
         for k, b in scaling.items() if k.startswith("BM_ManyParameters")],
     "many_parameters_accuracy": [
         {c: b.get(c) for c in ("n", "p", "Q_smolyak", "Q_halton", "smolyak_error", "halton_error",
-                               "reference_check")}
+                               "Q_hyperbolic", "hyperbolic_error", "reference_check")}
         for k, b in propagation.items() if k.startswith("BM_ManyParametersAccuracy")],
     "forecast_threads": {k: b for k, b in scaling.items() if k.startswith("BM_ForecastThreads")},
     "enkf": enkf.get(enkf_name, {}),

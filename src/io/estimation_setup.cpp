@@ -41,7 +41,7 @@ std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
 std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model) {
   ParameterMapping mapping(*model, c.uncertain);
-  const PolynomialBasis basis(mapping.germs(), c.pc_order);
+  const PolynomialBasis basis(mapping.germs(), c.pc_order, c.pc_truncation);
   const bool smolyak = c.collocation.sequence == PointSequence::kSmolyak;
   try {
     const CollocationDesign design(basis, c.collocation.sequence,

@@ -144,10 +144,30 @@ RoadConfig readRoad(YamlMapReader r) {
   return road;
 }
 
-std::size_t basisSize(int n, int p) {
+std::size_t basisSize(int n, int p, const BasisTruncation& truncation) {
+  if (truncation.kind == TruncationKind::kHyperbolic) {
+    return n < 1 ? 1 : truncatedMultiIndices(n, p, truncation).size();
+  }
   double s = 1.0;  // C(n + p, p)
   for (int i = 1; i <= p; ++i) s = s * (n + i) / i;
   return static_cast<std::size_t>(std::llround(s));
+}
+
+BasisTruncation readTruncation(YamlMapReader& pc) {
+  BasisTruncation t;
+  std::string kind = toString(t.kind);
+  pc.text("truncation", kind);
+  try {
+    t.kind = truncationKindFromString(kind);
+  } catch (const std::invalid_argument&) {
+    pc.fail("truncation", "'" + kind + "'", "total_degree or hyperbolic");
+  }
+  if (pc.has("q_norm") && t.kind != TruncationKind::kHyperbolic) {
+    pc.fail("q_norm", "(set)", "no q_norm unless pc.truncation is hyperbolic");
+  }
+  t.q_norm = t.kind == TruncationKind::kHyperbolic ? 0.5 : 1.0;
+  pc.number("q_norm", t.q_norm, 0.0, 1.0, true);
+  return t;
 }
 
 bool readFlag(YamlMapReader& r, const std::string& key, bool value);
@@ -457,8 +477,9 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
 
   YamlMapReader pc = root.map("pc");
   pc.integer("order", c.pc_order, 0, 20);
+  c.pc_truncation = readTruncation(pc);
   pc.finish();
-  const std::size_t terms = basisSize(n, c.pc_order);
+  const std::size_t terms = basisSize(n, c.pc_order, c.pc_truncation);
 
   YamlMapReader col = root.map("collocation");
   std::string seq = toString(c.collocation.sequence);

@@ -19,6 +19,7 @@
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/road_input.h"
 #include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/pc/basis_truncation.h"
 #include "pc_ekf/pc/collocation_design.h"
 #include "pc_ekf/pc/germ.h"
 
@@ -176,6 +177,7 @@ struct EstimatorConfig {
   bool rollPlane() const { return model_type->name() == "roll_plane"; }
   std::vector<UncertainParameter> uncertain;
   int pc_order = 4;
+  BasisTruncation pc_truncation;  // pc.truncation, pc.q_norm
   CollocationConfig collocation;
   RoadConfig road;
   SamplingConfig sampling;

@@ -37,15 +37,15 @@ std::vector<std::vector<int>> totalDegreeMultiIndices(int dimension, int order) 
   return indices;
 }
 
-PolynomialBasis::PolynomialBasis(std::vector<GermSpec> germs, int order)
-    : germs_(std::move(germs)), order_(order) {
+PolynomialBasis::PolynomialBasis(std::vector<GermSpec> germs, int order, BasisTruncation truncation)
+    : germs_(std::move(germs)), order_(order), truncation_(truncation) {
   if (germs_.empty()) throw std::invalid_argument("PolynomialBasis: no germs");
   if (order_ < 0) {
     throw std::invalid_argument("PolynomialBasis: negative order " + std::to_string(order_));
   }
   families_.reserve(germs_.size());
   for (const GermSpec& g : germs_) families_.emplace_back(g);
-  indices_ = totalDegreeMultiIndices(dimension(), order_);
+  indices_ = truncatedMultiIndices(dimension(), order_, truncation_);
 }
 
 Eigen::VectorXd PolynomialBasis::evaluate(const Eigen::Ref<const Eigen::VectorXd>& xi) const {

@@ -1,10 +1,11 @@
-// Multivariate total-degree orthonormal basis (docs/method.md §3.3).
+// Multivariate orthonormal basis, total degree or hyperbolic cross (docs/method.md §3.3).
 #pragma once
 
 #include <Eigen/Dense>
 #include <type_traits>
 #include <vector>
 
+#include "pc_ekf/pc/basis_truncation.h"
 #include "pc_ekf/pc/germ.h"
 #include "pc_ekf/pc/orthonormal_family.h"
 
@@ -18,11 +19,13 @@ std::vector<std::vector<int>> totalDegreeMultiIndices(int dimension, int order);
 
 class PolynomialBasis {
  public:
-  // Throws std::invalid_argument on empty germs or negative order.
-  PolynomialBasis(std::vector<GermSpec> germs, int order);
+  // Throws std::invalid_argument on empty germs, negative order or a q-norm
+  // outside (0, 1].
+  PolynomialBasis(std::vector<GermSpec> germs, int order, BasisTruncation truncation = {});
 
   int dimension() const { return static_cast<int>(germs_.size()); }
   int order() const { return order_; }
+  const BasisTruncation& truncation() const { return truncation_; }
   int size() const { return static_cast<int>(indices_.size()); }  // S
   const std::vector<GermSpec>& germs() const { return germs_; }
   const std::vector<std::vector<int>>& multiIndices() const { return indices_; }
@@ -52,6 +55,7 @@ class PolynomialBasis {
  private:
   std::vector<GermSpec> germs_;
   int order_;
+  BasisTruncation truncation_;
   std::vector<OrthonormalFamily> families_;
   std::vector<std::vector<int>> indices_;
 };

@@ -94,7 +94,7 @@ int main(int argc, char** argv) {
     bag.samples = samples;
 
     const ParameterMapping mapping(*model, config.uncertain);
-    const PolynomialBasis basis(mapping.germs(), config.pc_order);
+    const PolynomialBasis basis(mapping.germs(), config.pc_order, config.pc_truncation);
     bag.ground_truth = groundTruthMessage(mapping, truthXiAt(config, 0.0), &basis, bag.origin);
     // A truth that changes: also one ground truth per sample, at its stamp.
     for (std::size_t k = 0; !config.truth.schedule.empty() && k < samples.size(); ++k) {

@@ -381,6 +381,11 @@ void BM_ManyParametersAccuracy(benchmark::State& state) {
   state.counters["reference_check"] = momentError(ref_check, ref);
   state.counters["smolyak_error"] = momentError(m_sparse, ref);
   state.counters["halton_error"] = momentError(m_halton, ref);
+  if (n == 8) {  // the hyperbolic-cross row: p = 4, q = 0.5, Q = 2S Halton
+    const Scenario hyperbolic = makeScenario(hyperbolicConfig(n));
+    state.counters["Q_hyperbolic"] = hyperbolic.propagator->design().pointCount();
+    state.counters["hyperbolic_error"] = momentError(pcForecast(hyperbolic), ref);
+  }
 }
 BENCHMARK(BM_ManyParametersAccuracy)
     ->Arg(3)

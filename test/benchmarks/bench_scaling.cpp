@@ -72,15 +72,17 @@ BENCHMARK(BM_UpdateScaling)
 // One-step update (square root, dt = 0.03 s, the bump's first 0.6 s) with n
 // uncertain roll-plane parameters (bench_support.h), p = scalingOrder(n), on
 // `threads` threads. Design 0: Smolyak sparse grid of level p (least squares
-// on its nodes, the default projection); 1: Q = 2S Halton points. Wall time per sample
+// on its nodes, the default projection); 1: Q = 2S Halton points; 2: p = 4,
+// hyperbolic cross q = 0.5, Q = 2S Halton points. Wall time per sample
 // (the workers' time counts), best of the passes, median over the samples.
 void BM_ManyParameters(benchmark::State& state) {
   const int n = static_cast<int>(state.range(0)), threads = static_cast<int>(state.range(1));
-  const bool halton = state.range(2) == 1;
-  const int p = scalingOrder(n);
+  const bool halton = state.range(2) >= 1, hyperbolic = state.range(2) == 2;
+  const int p = hyperbolic ? 4 : scalingOrder(n);
   const EstimatorConfig c =
-      halton ? manyParameterConfig(n, p, PointSequence::kHalton, 2 * basisTerms(n, p), threads)
-             : manyParameterConfig(n, p, PointSequence::kSmolyak, p, threads);
+      hyperbolic ? hyperbolicConfig(n, threads)
+      : halton   ? manyParameterConfig(n, p, PointSequence::kHalton, 2 * basisTerms(n, p), threads)
+                 : manyParameterConfig(n, p, PointSequence::kSmolyak, p, threads);
   const Scenario s = makeScenario(c);
   const int samples = 20;
   std::vector<double> best;
@@ -91,6 +93,7 @@ void BM_ManyParameters(benchmark::State& state) {
   state.counters["S"] = s.propagator->termCount();
   state.counters["Q"] = s.propagator->design().pointCount();
   state.counters["smolyak"] = halton ? 0 : 1;
+  state.counters["q_norm"] = c.pc_truncation.q_norm;
   state.counters["threads"] = s.propagator->threads();
   state.counters["median_us"] = 1e6 * quantile(best, 0.5);
   state.counters["p99_us"] = 1e6 * quantile(best, 0.99);
@@ -98,6 +101,8 @@ void BM_ManyParameters(benchmark::State& state) {
 }
 BENCHMARK(BM_ManyParameters)
     ->ArgsProduct({{2, 3, 4, 6, 8}, {1, 2}, {0, 1}})
+    ->Args({8, 1, 2})
+    ->Args({8, 2, 2})
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 

@@ -70,6 +70,16 @@ inline EstimatorConfig manyParameterConfig(int n, int p, PointSequence sequence,
   return c;
 }
 
+// The many-parameter table's hyperbolic-cross row: n = 8, p = 4, q = 0.5
+// (S = 61 instead of 495 terms), Q = 2S Halton points.
+inline EstimatorConfig hyperbolicConfig(int n, int threads = 1, int samples = 100) {
+  const BasisTruncation t{TruncationKind::kHyperbolic, 0.5};
+  const int s = static_cast<int>(truncatedMultiIndices(n, 4, t).size());
+  EstimatorConfig c = manyParameterConfig(n, 4, PointSequence::kHalton, 2 * s, threads, samples);
+  c.pc_truncation = t;
+  return c;
+}
+
 // Order p of the scaling table per number n of uncertain parameters: the
 // highest whose sparse grid (level p, exact to degree 2p + 1) keeps the
 // one-step update far above real time on two cores.

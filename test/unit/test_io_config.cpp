@@ -102,6 +102,33 @@ TEST(Config, TooFewCollocationPointsAreRefusedNamingTheKey) {
                                         kMinimal, "ok.yaml"));
 }
 
+TEST(Config, TruncationKeys) {
+  // Default: total degree, the paper's S = 15.
+  EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").pc_truncation.kind,
+            TruncationKind::kTotalDegree);
+  const EstimatorConfig c = parseConfigString(
+      std::string("pc: {order: 4, truncation: hyperbolic, q_norm: 0.5}\ncollocation: {points: "
+                  "10}\n") +
+          kMinimal,
+      "ok.yaml");  // S = 10 at q = 0.5: 10 points suffice
+  EXPECT_EQ(c.pc_truncation.kind, TruncationKind::kHyperbolic);
+  EXPECT_DOUBLE_EQ(c.pc_truncation.q_norm, 0.5);
+  std::string e = errorOf(std::string("pc: {truncation: hyperbolic, q_norm: 0.5}\n"
+                                      "collocation: {points: 9}\n") +
+                          kMinimal);
+  EXPECT_NE(e.find("collocation.points"), std::string::npos) << e;
+  EXPECT_NE(e.find("S = 10"), std::string::npos) << e;
+  e = errorOf(std::string("pc: {truncation: cross}\n") + kMinimal);
+  EXPECT_NE(e.find("pc.truncation"), std::string::npos) << e;
+  EXPECT_NE(e.find("total_degree or hyperbolic"), std::string::npos) << e;
+  for (const char* q : {"0", "1.5", "-0.5"}) {
+    e = errorOf(std::string("pc: {truncation: hyperbolic, q_norm: ") + q + "}\n" + kMinimal);
+    EXPECT_NE(e.find("pc.q_norm"), std::string::npos) << q << ": " << e;
+  }
+  e = errorOf(std::string("pc: {q_norm: 0.5}\n") + kMinimal);  // total degree has no q
+  EXPECT_NE(e.find("pc.q_norm"), std::string::npos) << e;
+}
+
 TEST(Config, SparseGridKeys) {
   const EstimatorConfig c = parseConfigString(
       std::string(
