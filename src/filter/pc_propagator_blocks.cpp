@@ -73,9 +73,11 @@ bool PcPropagator::forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1,
   w.z.resize(nz, q_count);
   w.channel_sums.resize(nz, regression ? 0 : s_count * blocks);
   for (Eigen::MatrixXd* m : {&w.sum, &w.sum_sq, &w.err_sq, &w.spread}) m->resize(nz, blocks);
-  // Parts of whole blocks: two per thread, taken by whichever thread is free.
+  // Parts of whole blocks, one per thread (each part repeats the integrator's
+  // per-step work, so more parts cost more than they balance), taken by
+  // whichever thread is free.
   const std::vector<long> block_bounds =
-      columnParts(blocks, workers_ ? 2 * workers_->threads() : 1, 1, 1);
+      columnParts(blocks, workers_ ? workers_->threads() : 1, 1, 1);
   w.bounds.clear();
   for (long b : block_bounds) w.bounds.push_back(std::min<long>(b * kBlock, q_count));
   w.unusable.assign(w.bounds.size() - 1, 0);
