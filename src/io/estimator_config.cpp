@@ -512,6 +512,10 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
                  " for the quadrature projection (exact to degree 2 level + 1), or "
                  "projection: regression");
   }
+  c.collocation.nested = readFlag(col, "nested", c.collocation.nested);
+  if (c.collocation.nested && c.collocation.sequence != PointSequence::kSmolyak) {
+    col.fail("nested", "true", "false for sequence " + seq + " (nested rules are smolyak's)");
+  }
   col.unsignedInteger("start_index", c.collocation.start_index);
   col.number("max_condition", c.collocation.max_condition, 1.0, kInf);
   col.integer("threads", c.collocation.threads, 0, 1024);

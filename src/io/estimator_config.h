@@ -90,6 +90,7 @@ struct CollocationConfig {
   int points = 30;
   int level = -1;  // smolyak only; -1 = the PC order (the lowest exact for the projection)
   ProjectionMethod projection = ProjectionMethod::kAuto;
+  bool nested = false;  // smolyak: nested Clenshaw-Curtis rules for symmetric bounded germs
   std::uint64_t start_index = 1;
   double max_condition = 1e8;
   int threads = 0;  // forecast threads; 0 = the machine's cores

@@ -65,7 +65,7 @@ std::vector<OrthonormalFamily> familiesOf(const PolynomialBasis& basis) {
 
 CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence sequence,
                                      int count, std::uint64_t halton_start, double max_condition,
-                                     ProjectionMethod projection)
+                                     ProjectionMethod projection, bool nested)
     : sequence_(sequence) {
   const int n = basis.dimension();
   const int s = basis.size();
@@ -119,7 +119,7 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
       basis.tensorGaussRule(count, &points_, &weights);
       break;
     case PointSequence::kSmolyak: {
-      SparseGridRule rule = smolyakRule(familiesOf(basis), count);
+      SparseGridRule rule = smolyakRule(familiesOf(basis), count, nested);
       points_ = std::move(rule.nodes);
       weights = std::move(rule.weights);
       if (points_.rows() < s) {

@@ -37,7 +37,8 @@ class CollocationDesign {
   // a message giving Q, S and the condition number.
   CollocationDesign(const PolynomialBasis& basis, PointSequence sequence, int count,
                     std::uint64_t halton_start = 1, double max_condition = 1e8,
-                    ProjectionMethod projection = ProjectionMethod::kAuto);
+                    ProjectionMethod projection = ProjectionMethod::kAuto,
+                    bool nested = false);  // smolyak: nested rules where the germ has them
 
   PointSequence sequence() const { return sequence_; }
   // The method in use (never kAuto).

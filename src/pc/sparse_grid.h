@@ -20,7 +20,20 @@ struct SparseGridRule {
   Eigen::MatrixXd nodes;
   Eigen::VectorXd weights;
 };
-SparseGridRule smolyakRule(const std::vector<OrthonormalFamily>& families, int level);
+// nested = true: a germ whose measure is symmetric on a bounded interval
+// (uniform, Beta with alpha = beta) uses nested Clenshaw-Curtis nodes instead
+// (level l: the smallest size 1, 3, 5, 9, 17, ... exact to 2l + 1; each size's
+// nodes are among the next's, so the grid reuses them) with interpolatory
+// weights for the germ's own measure: an m-point rule (m odd, symmetric) is
+// exact to degree m >= 2l + 1, so the exactness above holds unchanged. Other
+// germs keep their Gauss rules.
+SparseGridRule smolyakRule(const std::vector<OrthonormalFamily>& families, int level,
+                           bool nested = false);
+
+// The nested rule of `family` at `level` (its nodes, weights summing to 1);
+// throws std::invalid_argument when the family has no nested rule here.
+QuadratureRule nestedRule(const OrthonormalFamily& family, int level);
+bool hasNestedRule(const OrthonormalFamily& family);
 
 // Total-degree exactness of smolyakRule(families, level).
 inline int smolyakExactDegree(int level) { return 2 * level + 1; }

@@ -102,6 +102,16 @@ TEST(Config, TooFewCollocationPointsAreRefusedNamingTheKey) {
                                         kMinimal, "ok.yaml"));
 }
 
+TEST(Config, NestedSparseGridKey) {
+  EXPECT_FALSE(parseConfigString(kMinimal, "ok.yaml").collocation.nested);
+  const EstimatorConfig c = parseConfigString(
+      std::string("collocation: {sequence: smolyak, level: 4, nested: true}\n") + kMinimal,
+      "ok.yaml");
+  EXPECT_TRUE(c.collocation.nested);
+  const std::string e = errorOf(std::string("collocation: {nested: true}\n") + kMinimal);
+  EXPECT_NE(e.find("collocation.nested"), std::string::npos) << e;  // halton has no rules to nest
+}
+
 TEST(Config, TruncationKeys) {
   // Default: total degree, the paper's S = 15.
   EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").pc_truncation.kind,
