@@ -37,6 +37,25 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
   if (settings_.drift.size() != 0 && settings_.drift.size() != n) {
     throw std::invalid_argument("drift: one intensity per uncertain parameter expected");
   }
+  const RelinearizeSettings& rl = settings_.relinearize;
+  if (!(rl.shrink >= 0.0 && rl.shrink < 1.0) || !(rl.width > 0.0) || !(rl.shrink * rl.width < 1.0)) {
+    throw std::invalid_argument("relinearize: need 0 <= shrink < 1, width > 0, shrink * width < 1");
+  }
+  startRelinearization();
+}
+
+void OneStepFilter::startRelinearization() {
+  kept_.clear();
+  restarts_ = 0;
+  relinearizing_ = settings_.relinearize.shrink > 0.0 && settings_.relinearize.max_restarts > 0;
+  start_theta_ = x_.bottomRows(propagator_->parameterCount());
+  start_stddev_ = pcStddev(start_theta_);
+}
+
+void OneStepFilter::endRelinearization() {
+  relinearizing_ = false;
+  kept_.clear();
+  kept_.shrink_to_fit();
 }
 
 double OneStepFilter::gateBound(int dof) {
@@ -55,6 +74,7 @@ void OneStepFilter::reset() {
   rejected_ = 0;
   violations_ = 0;
   health_.reset();
+  startRelinearization();
 }
 
 void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) {
@@ -66,6 +86,7 @@ void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) 
   samples_ = samples;
   violations_ = 0;
   health_.reset();
+  endRelinearization();
 }
 
 StepResult OneStepFilter::process(const Measurement& m) {
@@ -73,7 +94,67 @@ StepResult OneStepFilter::process(const Measurement& m) {
   const std::string problem = measurementProblem(m, static_cast<int>(model.channelNames().size()));
   if (!problem.empty()) throw std::invalid_argument("measurement rejected: " + problem);
   if (m.time < t_) throw std::invalid_argument("measurement rejected: time before the filter's");
+  StepResult r = step(m);
+  if (!relinearizing_) return r;
+  if (r.reopened) {  // the kept samples describe the load before the change
+    endRelinearization();
+    return r;
+  }
+  kept_.push_back(m);
+  // Due when a parameter has shrunk below `shrink` x its start; then every
+  // parameter whose working prior would be narrower than its start moves.
+  const RelinearizeSettings& rl = settings_.relinearize;
+  const Eigen::ArrayXd start = start_stddev_.array();
+  if (r.forecast.ok && (r.stddev.array() <= rl.shrink * start).any()) {
+    return relinearize(r, (rl.width * r.stddev.array() < start).cast<int>());
+  }
+  if (static_cast<int>(kept_.size()) >= settings_.relinearize.max_samples) endRelinearization();
+  return r;
+}
 
+StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed) {
+  const RelinearizeSettings& rl = settings_.relinearize;
+  // The parameters that have narrowed start again around their estimate; the
+  // others keep the distribution they started from (the prior, at first).
+  Eigen::MatrixXd theta = propagator_->mapping().workingCoefficients(
+      propagator_->basis(), r.mean, rl.width * r.stddev);
+  for (int i = 0; i < theta.rows(); ++i) {
+    if (!narrowed[i]) {
+      theta.row(i) = start_theta_.row(i);
+    } else if (pcStddev(theta.row(i))[0] <= 0.0) {
+      endRelinearization();  // a mean on the support's edge: no working prior
+      return r;
+    }
+  }
+  Eigen::MatrixXd x0;
+  try {
+    x0 = propagator_->stateFor(theta);
+  } catch (const std::invalid_argument&) {
+    endRelinearization();
+    return r;
+  }
+  const std::vector<Measurement> samples = std::move(kept_);
+  const int restarts = restarts_ + 1;
+  x_ = x0;
+  t_ = 0.0;
+  samples_ = 0;
+  rejected_ = 0;
+  violations_ = 0;
+  health_.reset();
+  StepResult last;
+  for (const Measurement& m : samples) last = step(m);
+  kept_ = samples;
+  restarts_ = restarts;
+  start_theta_ = theta;
+  start_stddev_ = pcStddev(theta);
+  if (restarts_ >= rl.max_restarts || last.reopened) endRelinearization();
+  last.relinearized = true;
+  last.restarts = restarts_;
+  return last;
+}
+
+StepResult OneStepFilter::step(const Measurement& m) {
+  const MechanicalModel& model = propagator_->model();
   StepResult r;
   const double dt = m.time - t_;
   r.forecast = propagator_->forecast(x_, t_, m.time);
@@ -112,6 +193,7 @@ StepResult OneStepFilter::process(const Measurement& m) {
   r.health.gated = r.gated;
   r.health.damped = r.damping < 1.0;
   r.rejected = rejected_;
+  r.restarts = restarts_;
   violations_ = r.health.nis_window_outside ? violations_ + 1 : 0;
   if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
     reopenExtendedState(x_, static_cast<int>(x_.rows()) - np,

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <memory>
+#include <vector>
 
 #include "pc_ekf/filter/health.h"
 #include "pc_ekf/filter/kalman_update.h"
@@ -24,6 +25,7 @@ struct OneStepSettings {
   SupportRule support = SupportRule::kIgnore;
   Eigen::VectorXd drift;  // per parameter, random-walk std per sqrt(s) (empty = none)
   ReopenSettings reopen;
+  RelinearizeSettings relinearize;
 };
 
 struct StepResult {
@@ -39,6 +41,8 @@ struct StepResult {
   double damping = 1.0;   // fraction of the update applied (support rule)
   bool reopened = false;  // uncertainty re-opened after this sample
   int rejected = 0;       // samples gated or rolled back since the prior
+  bool relinearized = false;  // the samples so far were re-run from a working prior
+  int restarts = 0;           // re-linearisations since the prior
 };
 
 class OneStepFilter {
@@ -55,9 +59,12 @@ class OneStepFilter {
   double time() const { return t_; }
   int samples() const { return samples_; }
   const OneStepSettings& settings() const { return settings_; }
-  // Restores a state (same propagator and settings); the rejected count is kept.
+  // Restores a state (same propagator and settings); the rejected count is
+  // kept, re-linearisation ends (the kept samples no longer lead to x).
   void restore(const Eigen::MatrixXd& x, double time, int samples);
   int rejected() const { return rejected_; }
+  // Earliest time the filter may still need the road from (a re-run).
+  double roadNeededFrom() const { return relinearizing_ ? 0.0 : t_; }
 
  private:
   std::shared_ptr<const PcPropagator> propagator_;
@@ -66,6 +73,11 @@ class OneStepFilter {
   // Gate threshold for `dof` channels (cached: quantiles are iterative).
   double gateBound(int dof);
   void safeguard(StepResult& r);
+  StepResult step(const Measurement& m);
+  // Re-runs the kept samples from a working prior around r; r when impossible.
+  StepResult relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed);
+  void startRelinearization();
+  void endRelinearization();
 
   Eigen::MatrixXd x_;
   Eigen::MatrixXd x_before_;  // state before the update (gate, roll-back, damping)
@@ -76,6 +88,11 @@ class OneStepFilter {
   int violations_ = 0;  // consecutive samples with the windowed NIS outside
   double t_ = 0.0;
   int samples_ = 0;
+  bool relinearizing_ = false;
+  std::vector<Measurement> kept_;   // since the (working) prior
+  Eigen::MatrixXd start_theta_;     // parameter coefficients at that start
+  Eigen::VectorXd start_stddev_;
+  int restarts_ = 0;
 };
 
 // Checks a measurement against a model's channels; "" when fine.

@@ -43,9 +43,13 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
 }
 
 Eigen::MatrixXd PcPropagator::priorState() const {
+  return stateFor(mapping_.priorCoefficients(basis_));
+}
+
+Eigen::MatrixXd PcPropagator::stateFor(const Eigen::MatrixXd& theta) const {
   const int ns = stateCount(), np = parameterCount();
   Eigen::MatrixXd x(ns + np, termCount());
-  x.bottomRows(np) = mapping_.priorCoefficients(basis_);
+  x.bottomRows(np) = theta;
   std::vector<std::string> reasons;
   const Eigen::MatrixXd params = parametersAtPoints(x.bottomRows(np), &reasons);
   for (const auto& r : reasons) {

@@ -55,6 +55,9 @@ class PcPropagator {
 
   // Prior X: theta from the config's germs, y the projected initial state.
   Eigen::MatrixXd priorState() const;
+  // X for the parameter coefficients theta (count x S): y the projected
+  // initial state. Throws std::invalid_argument naming an invalid point.
+  Eigen::MatrixXd stateFor(const Eigen::MatrixXd& theta) const;
   // Advances X from t0 to t1 (t1 >= t0; equal times leave X unchanged).
   ForecastReport forecast(Eigen::MatrixXd& x, double t0, double t1) const;
 

@@ -39,6 +39,12 @@ class ParameterMapping {
   Eigen::VectorXd germOf(const Eigen::VectorXd& values) const;
   // Prior coefficients (count x S): exact, the map is affine in each germ.
   Eigen::MatrixXd priorCoefficients(const PolynomialBasis& basis) const;
+  // Coefficients (count x S) of an affine distribution in the same germs with
+  // the given means and standard deviations (a working prior for
+  // re-linearisation, docs/method.md §4.9). A std is shrunk where its support
+  // would leave the prior's; a row is zero when its mean is not strictly inside.
+  Eigen::MatrixXd workingCoefficients(const PolynomialBasis& basis, const Eigen::VectorXd& mean,
+                                      const Eigen::VectorXd& stddev) const;
   // Support of each parameter under its prior germ (may be infinite).
   double lowerBound(int i) const;
   double upperBound(int i) const;

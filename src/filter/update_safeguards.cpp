@@ -129,8 +129,15 @@ void reopenExtendedState(Eigen::MatrixXd& x, int first_parameter, const Eigen::M
   reopenParameters(theta, prior, s);
   x.bottomRows(np) = theta;
   const Eigen::MatrixXd t_new = theta.rightCols(higher);
+  // The states were fitted under the parameters now in doubt: the spread the
+  // regression does not explain grows by the parameters' largest factor.
+  double grow = 1.0;
+  for (Eigen::Index i = 0; i < np; ++i) {
+    const double before = t_old.row(i).norm(), after = t_new.row(i).norm();
+    if (before > 0.0) grow = std::max(grow, after / before);
+  }
   x.topRows(first_parameter).rightCols(higher) =
-      b * t_new + residualOrthogonalTo(y - b * t_old, t_new);
+      b * t_new + grow * residualOrthogonalTo(y - b * t_old, t_new);
 }
 
 }  // namespace pc_ekf

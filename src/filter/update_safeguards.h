@@ -28,6 +28,21 @@ struct ReopenSettings {
   int after = 3;       // consecutive samples with the windowed NIS outside its bounds
 };
 
+// Re-linearisation (docs/method.md §4.9): the first samples are assimilated
+// while the distribution is as wide as the prior, and a linear update over
+// that width leaves an error the later samples do not remove. When a
+// parameter's std has shrunk below `shrink` x its std at the start, the
+// filter starts again from a working prior in the same germs (for that
+// parameter: mean = the current mean, std = `width` x the current std, inside
+// the prior's support; the others as they started) and re-runs the samples
+// kept since the start. Off when shrink = 0.
+struct RelinearizeSettings {
+  double shrink = 0.0;
+  double width = 10.0;
+  int max_restarts = 3;
+  int max_samples = 5000;  // samples kept for a re-run; more end re-linearisation
+};
+
 // Largest gamma in [0, 1] such that before + gamma (after - before) keeps every
 // mean strictly inside [lower, upper] (a margin of 1e-3 of the width; an
 // infinite bound never binds). A mean already outside may only move inwards.
@@ -53,10 +68,12 @@ void reopenParameters(Eigen::MatrixXd& theta, const Eigen::MatrixXd& prior,
 // Re-opens the parameter rows of the extended state `x` (parameters from row
 // `first_parameter`) as reopenParameters does, and carries the states along:
 // each state keeps its linear regression on the parameters (B = C_yt C_tt^-1
-// from the higher coefficients) and its residual, so the state widens with
-// the parameters it depends on. Re-opening the parameters alone would leave
-// the state certain at values fitted with the old parameters; without process
-// noise the data could then only correct the parameters, biasing them.
+// from the higher coefficients), so the state widens with the parameters it
+// depends on, and its residual, scaled by the largest factor by which a
+// parameter's std grew (the states were fitted under those parameters).
+// Re-opening the parameters alone would leave the state certain at values
+// fitted with the old parameters; without process noise the data could then
+// only correct the parameters, biasing them.
 void reopenExtendedState(Eigen::MatrixXd& x, int first_parameter, const Eigen::MatrixXd& prior,
                          const ReopenSettings& settings);
 

@@ -106,6 +106,7 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
   s.support = c.safeguards.support;
   s.drift = Eigen::Map<const Eigen::VectorXd>(c.safeguards.drift.data(), c.safeguards.drift.size());
   s.reopen = c.safeguards.reopen;
+  s.relinearize = c.safeguards.relinearize;
   return s;
 }
 

@@ -201,6 +201,17 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   r.number("width", s.reopen.width, 0.0, kInf, true);
   r.integer("after", s.reopen.after, 1, 100000000);
   r.finish();
+  YamlMapReader l = f.map("relinearize");
+  RelinearizeSettings& rl = s.relinearize;
+  l.number("shrink", rl.shrink, 0.0, 0.999);
+  l.number("width", rl.width, 0.0, kInf, true);
+  l.integer("max_restarts", rl.max_restarts, 1, 100);
+  l.integer("max_samples", rl.max_samples, 1, 100000000);
+  if (!(rl.shrink * rl.width < 1.0)) {
+    l.fail("width", std::to_string(rl.width),
+           "shrink x width < 1 (each restart must narrow the working prior)");
+  }
+  l.finish();
 }
 
 void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {

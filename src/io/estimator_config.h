@@ -134,6 +134,7 @@ struct SafeguardConfig {
   SupportRule support = SupportRule::kDamp;
   std::vector<double> drift;  // per uncertain parameter, random-walk std per sqrt(s) (empty = none)
   ReopenSettings reopen;
+  RelinearizeSettings relinearize;  // one-step (filter.relinearize)
 };
 
 struct PdfConfig {

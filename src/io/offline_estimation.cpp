@@ -93,6 +93,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
     r->reopened += last.reopened;
   }
   r->rejected_samples = filter.rejected();
+  r->relinearized = last.restarts;
   r->loo_channels = c.model_type->channelNames();
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);

@@ -61,6 +61,7 @@ struct OfflineResult {
   int rejected_samples = 0;     // one-step: gated or rolled back
   int damped_updates = 0;       // updates scaled down by the support rule
   int reopened = 0;             // one-step: times the uncertainty was re-opened
+  int relinearized = 0;         // one-step: re-linearisations (filter.relinearize)
   double band_nested_fraction = 1.0;
   long integrations = 0;  // point- or member-intervals, or full simulations (grid)
   double wall_seconds = 0.0;

@@ -77,6 +77,7 @@ std::string toJson(const OfflineResult& r) {
   j["rejected_samples"] = r.rejected_samples;
   j["damped_updates"] = r.damped_updates;
   j["reopened"] = r.reopened;
+  j["relinearized"] = r.relinearized;
   if (r.method == "grid") {
     j["modes"] = r.modes;
     j["border_mass"] = r.border_mass;

@@ -54,7 +54,9 @@ EstimatorRun::EstimatorRun(const EstimatorConfig& config,
       decimated_(propagator, makeOneStepSettings(config)) {}
 
 double EstimatorRun::oldestTime() const {
-  return config_.node.coherence_check ? std::min(full_.time(), decimated_.time()) : full_.time();
+  // A filter that may still re-linearise needs the road from its start.
+  const double full = full_.roadNeededFrom();
+  return config_.node.coherence_check ? std::min(full, decimated_.roadNeededFrom()) : full;
 }
 
 ParameterEstimate EstimatorRun::message(const StepResult& r, const ros::Time& stamp) const {

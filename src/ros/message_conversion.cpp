@@ -373,6 +373,10 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
   msg.rejected_samples = static_cast<std::uint32_t>(std::max(0, result.rejected));
   msg.damping = result.damping;
   msg.reopened = result.reopened;
+  if (result.relinearized) {  // docs/method.md §4.9; not a health problem
+    msg.warnings.push_back("re-linearised (" + std::to_string(result.restarts) +
+                           "): the samples so far re-run from a working prior around the estimate");
+  }
   const int unusable = result.forecast.invalid_points + result.forecast.nonfinite_points;
   if (unusable > 0) {  // docs/method.md §4.1: reported, not fatal while enough points remain
     msg.warnings.push_back("forecast: " + std::to_string(unusable) + " of " +

@@ -1,5 +1,6 @@
 // rostest: a bag of the load-change course (synthesize_bag, ground truth per
-// sample) replayed at full speed into /tracking (drift + re-open) and /fixed
+// sample) replayed at full speed into /tracking (drift + re-open +
+// re-linearisation) and /fixed
 // (constant parameters). After the second bump /tracking is within 3
 // reported std of the new mass and healthy, and equals estimate_offline
 // --bag with the same settings to 1e-9; /fixed is confidently off and
@@ -36,7 +37,8 @@ TEST(ReplayLoadChange, DriftAndReopenFollowTheNewLoadConstantParametersAreFlagge
   // The node's settings as one file, for estimate_offline.
   const std::string tracking = scratch.file("tracking.yaml");
   std::ofstream(tracking) << readText(config("load_change_course.yaml"))
-                          << "\nfilter: {drift: [2.0, 0.0], reopen: {mode: width, width: 0.5, after: 3}}\n";
+                          << "\nfilter: {drift: [2.0, 0.0], reopen: {mode: width, width: 0.5, after: 3},"
+                             " relinearize: {shrink: 0.01, width: 20.0}}\n";
   r = run(scratch, PC_EKF_EXE_ESTIMATE_OFFLINE, "--config " + quote(tracking) + " --bag " + quote(bag));
   ASSERT_EQ(r.status, 0) << r.err;
   const auto offline = parseParameters(r.out);
@@ -67,6 +69,13 @@ TEST(ReplayLoadChange, DriftAndReopenFollowTheNewLoadConstantParametersAreFlagge
     EXPECT_NEAR(t.mean[i], o.mean, 1e-9 * std::abs(o.mean)) << t.names[i];
     EXPECT_NEAR(t.stddev[i], o.stddev, 1e-9 * std::abs(o.stddev) + 1e-12) << t.names[i];
   }
+  // The node re-linearised in the first bump (road kept from t = 0) and still
+  // equals the offline run above.
+  int relinearized = 0;
+  for (const auto& e : *tracked) {
+    for (const auto& w : e.warnings) relinearized += w.rfind("re-linearised", 0) == 0;
+  }
+  EXPECT_GE(relinearized, 1);
   const ParameterEstimate& f = fixed->back();
   EXPECT_GT(std::abs(f.mean[0] - kNewMass), 10.0 * f.stddev[0]);
   EXPECT_FALSE(f.healthy);

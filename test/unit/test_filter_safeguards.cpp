@@ -4,7 +4,9 @@
 
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/update_safeguards.h"
+#include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
 namespace {
@@ -92,9 +94,10 @@ TEST(Reopen, WidthAroundTheMeanOrBackToThePrior) {
   EXPECT_EQ(p, prior);
 }
 
-// The states keep what they know given the parameters: the regression on the
-// parameters and the residual covariance are those before the re-open, while
-// the parameter rows are exactly reopenParameters' result.
+// The states keep their regression on the parameters and their residual
+// structure, widened by the parameters' largest std factor (they were fitted
+// under those parameters), while the parameter rows are exactly
+// reopenParameters' result.
 TEST(Reopen, StatesKeepTheirRegressionOnTheParameters) {
   Eigen::MatrixXd x(4, 6);
   x << 0.10, 1e-3, -2e-4, 5e-5, 1e-5, 8e-4,     // state u
@@ -117,10 +120,53 @@ TEST(Reopen, StatesKeepTheirRegressionOnTheParameters) {
     EXPECT_EQ(Eigen::VectorXd(r.col(0).head(2)), Eigen::VectorXd(x.col(0).head(2)));
     const auto before = regression(pcCovariance(x)), after = regression(pcCovariance(r));
     EXPECT_LT((after.first - before.first).norm(), 1e-9 * before.first.norm());
-    EXPECT_LT((after.second - before.second).norm(), 1e-9 * before.second.norm());
+    // The residual covariance grows by the square of the largest std factor.
+    double grow = 1.0;
+    for (int i = 2; i < 4; ++i) {
+      grow = std::max(grow, r.row(i).tail(5).norm() / x.row(i).tail(5).norm());
+    }
+    EXPECT_GT(grow, 10.0);
+    EXPECT_LT((after.second - grow * grow * before.second).norm(),
+              1e-9 * grow * grow * before.second.norm());
     // The state widened with the parameters (here by far more than it was).
     EXPECT_GT(pcCovariance(r)(0, 0), 100.0 * pcCovariance(x)(0, 0));
   }
+}
+
+// A re-linearisation's working prior: exactly the asked mean and std in the
+// same germs (affine, degree-1 terms only), shrunk to keep its support inside
+// the prior's; a mean on the support's edge gives no working prior (zero row).
+TEST(Relinearize, WorkingPriorHasTheAskedMomentsInsideThePriorSupport) {
+  const EstimatorConfig c = parseConfigString(
+      "uncertain:\n"
+      "  - {name: added_mass, nominal: 200.0, relative_range: 0.5, germ: {family: beta, alpha: 2, beta: 2}}\n"
+      "  - {name: added_mass_position, nominal: 0.762, relative_range: 0.25, germ: {family: uniform}}\n",
+      "w.yaml");
+  const auto prop = makePropagator(c, makeModel(c, makeRoad(c)));
+  const ParameterMapping& map = prop->mapping();
+  const PolynomialBasis& basis = prop->basis();
+  // Inside: mean and std as asked.
+  Eigen::MatrixXd w = map.workingCoefficients(basis, Eigen::Vector2d(230.0, 0.70),
+                                              Eigen::Vector2d(2.0, 0.01));
+  EXPECT_NEAR(pcMean(w)[0], 230.0, 1e-12);
+  EXPECT_NEAR(pcMean(w)[1], 0.70, 1e-12);
+  EXPECT_NEAR(pcStddev(w)[0], 2.0, 1e-12);
+  EXPECT_NEAR(pcStddev(w)[1], 0.01, 1e-12);
+  // Near the upper end (300 kg): beta(2,2) spans mean +- sqrt(5) std, so the
+  // std is cut to keep mean + sqrt(5) std inside; uniform spans +- sqrt(3) std.
+  w = map.workingCoefficients(basis, Eigen::Vector2d(295.0, 0.94), Eigen::Vector2d(10.0, 0.1));
+  EXPECT_NEAR(pcStddev(w)[0], 0.999 * 5.0 / std::sqrt(5.0), 1e-9);
+  EXPECT_NEAR(pcStddev(w)[1], 0.999 * (map.upperBound(1) - 0.94) / std::sqrt(3.0), 1e-9);
+  const Eigen::MatrixXd xi = Eigen::MatrixXd::Random(200, 2);  // uniform germ points
+  for (int q = 0; q < xi.rows(); ++q) {
+    const double v = w.row(1).dot(basis.evaluate(Eigen::Vector2d(0.0, xi(q, 1))));
+    EXPECT_LT(v, map.upperBound(1));
+    EXPECT_GT(v, map.lowerBound(1));
+  }
+  // On the edge: no room, zero row.
+  w = map.workingCoefficients(basis, Eigen::Vector2d(300.0, 0.70), Eigen::Vector2d(1.0, 0.01));
+  EXPECT_EQ(w.row(0).norm(), 0.0);
+  EXPECT_NEAR(pcStddev(w)[1], 0.01, 1e-12);
 }
 
 const std::string kUncertain =
@@ -131,7 +177,8 @@ const std::string kUncertain =
 TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   const EstimatorConfig c = parseConfigString(kUncertain +
       "measurement: {r_rule: sensor, sensor_std: [1e-3, 1e-3, 1e-2, 1e-2]}\n"
-      "filter: {support: ignore, drift: [2.0, 0.0], reopen: {mode: prior, after: 7}}\n"
+      "filter: {support: ignore, drift: [2.0, 0.0], reopen: {mode: prior, after: 7},\n"
+      "         relinearize: {shrink: 0.01, width: 20, max_restarts: 5, max_samples: 300}}\n"
       "health: {innovation_gate: 1e-6, predictive_check: false}\n",
       "t.yaml");
   EXPECT_EQ(c.measurement.r_rule, NoiseRule::kSensor);
@@ -140,6 +187,10 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_EQ(c.safeguards.drift, (std::vector<double>{2.0, 0.0}));
   EXPECT_EQ(c.safeguards.reopen.mode, ReopenMode::kPrior);
   EXPECT_EQ(c.safeguards.reopen.after, 7);
+  EXPECT_DOUBLE_EQ(c.safeguards.relinearize.shrink, 0.01);
+  EXPECT_DOUBLE_EQ(c.safeguards.relinearize.width, 20.0);
+  EXPECT_EQ(c.safeguards.relinearize.max_restarts, 5);
+  EXPECT_EQ(c.safeguards.relinearize.max_samples, 300);
   EXPECT_DOUBLE_EQ(c.health.innovation_gate, 1e-6);
   EXPECT_FALSE(c.health.predictive_check);
   // Defaults: the paper's rule, damping on, no drift, no re-opening, gate off.
@@ -148,6 +199,7 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_EQ(d.safeguards.support, SupportRule::kDamp);
   EXPECT_TRUE(d.safeguards.drift.empty());
   EXPECT_EQ(d.safeguards.reopen.mode, ReopenMode::kOff);
+  EXPECT_EQ(d.safeguards.relinearize.shrink, 0.0);
   EXPECT_EQ(d.health.innovation_gate, 0.0);
   const std::pair<const char*, const char*> bad[] = {
       {"measurement: {r_rule: sensor}", "measurement.sensor_std"},
@@ -156,6 +208,9 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
       {"filter: {support: clamp}", "filter.support"},
       {"filter: {drift: [1.0]}", "filter.drift"},
       {"filter: {reopen: {mode: sometimes}}", "filter.reopen.mode"},
+      {"filter: {relinearize: {shrink: 1.5}}", "filter.relinearize.shrink"},
+      {"filter: {relinearize: {shrink: 0.1, width: 20}}", "filter.relinearize.width"},
+      {"filter: {relinearize: {shrinks: 0.1}}", "filter.relinearize.shrinks"},
       {"health: {innovation_gate: 0.9}", "health.innovation_gate"},
   };
   for (const auto& [yaml, key] : bad) {
