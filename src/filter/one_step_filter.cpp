@@ -142,12 +142,16 @@ StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi&
   violations_ = 0;
   health_.reset();
   StepResult last;
-  for (const Measurement& m : samples) last = step(m);
+  bool reopened = false;
+  for (const Measurement& m : samples) {
+    last = step(m);
+    reopened = reopened || last.reopened;
+  }
   kept_ = samples;
   restarts_ = restarts;
   start_theta_ = theta;
   start_stddev_ = pcStddev(theta);
-  if (restarts_ >= rl.max_restarts || last.reopened) endRelinearization();
+  if (restarts_ >= rl.max_restarts || reopened) endRelinearization();
   last.relinearized = true;
   last.restarts = restarts_;
   return last;
