@@ -38,8 +38,8 @@ struct ReopenSettings {
 // kept since the start. Off when shrink = 0.
 struct RelinearizeSettings {
   double shrink = 0.0;
-  double width = 10.0;
-  int max_restarts = 3;
+  double width = 20.0;
+  int max_restarts = 4;
   int max_samples = 5000;  // samples kept for a re-run; more end re-linearisation
 };
 
