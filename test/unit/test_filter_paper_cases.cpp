@@ -12,6 +12,11 @@ namespace {
 
 const std::string kConfig = std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml";
 
+// The settings a real vehicle starts from (its schedule, its re-linearisation).
+EstimatorConfig liveConfig() {
+  return loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml");
+}
+
 struct CaseData {
   EstimatorConfig config;
   std::shared_ptr<const MechanicalModel> model;
@@ -60,8 +65,7 @@ TEST(PaperCaseA, SquareRootOneStepAndEsMdaAgainstTheReferencePosterior) {
 // decreasing schedule of vehicle_live.yaml weights the well-linearised last
 // pass most and lands on the exact posterior.
 TEST(PaperCaseB, DecreasingInflationScheduleRemovesEsMdaBias) {
-  const std::vector<double> live =
-      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml").es_mda.alphas;
+  const std::vector<double> live = liveConfig().es_mda.alphas;
   ASSERT_GT(live.size(), 4u);
   for (std::uint64_t seed : {1, 2}) {
     CaseData run = makeRun(100, seed);
@@ -86,8 +90,7 @@ TEST(PaperCaseB, DecreasingInflationScheduleRemovesEsMdaBias) {
 // samples from a working prior around the estimate and lands on the exact
 // posterior.
 TEST(PaperCaseB, RelinearizationPutsTheOneStepFilterOnTheExactPosterior) {
-  const RelinearizeSettings live =
-      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml").safeguards.relinearize;
+  const RelinearizeSettings live = liveConfig().safeguards.relinearize;
   ASSERT_GT(live.shrink, 0.0);
   double plain_worst = 0.0;
   for (std::uint64_t seed : {1, 2}) {
@@ -113,8 +116,7 @@ TEST(PaperCaseB, RelinearizationPutsTheOneStepFilterOnTheExactPosterior) {
 // it (the filter then runs exactly as without it), reset() starts it afresh.
 TEST(PaperCaseB, RelinearizationEndsOnRestoreAndStartsAgainOnReset) {
   CaseData run = makeRun(100, 1);
-  run.config.safeguards.relinearize =
-      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml").safeguards.relinearize;
+  run.config.safeguards.relinearize = liveConfig().safeguards.relinearize;
   const auto prop = makePropagator(run.config, run.model);
   EstimatorConfig plain_config = run.config;
   plain_config.safeguards.relinearize.shrink = 0.0;
