@@ -133,7 +133,6 @@ StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi&
     endRelinearization();
     return r;
   }
-  const std::vector<Measurement> samples = std::move(kept_);
   const int restarts = restarts_ + 1;
   x_ = x0;
   t_ = 0.0;
@@ -143,11 +142,10 @@ StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi&
   health_.reset();
   StepResult last;
   bool reopened = false;
-  for (const Measurement& m : samples) {
+  for (const Measurement& m : kept_) {  // step() leaves kept_ alone
     last = step(m);
     reopened = reopened || last.reopened;
   }
-  kept_ = samples;
   restarts_ = restarts;
   start_theta_ = theta;
   start_stddev_ = pcStddev(theta);
