@@ -38,6 +38,7 @@ PC_EKF_APT_PACKAGES=(
   catkin-lint                    # test.sh: the package is catkin_lint clean
   nlohmann-json3-dev             # estimate_offline's JSON output
   clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
+  ccache                         # compiler cache: clones and worktrees on one machine share objects
 )
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }
@@ -67,10 +68,17 @@ pc_ekf_prepare_workspace() {
 }
 
 # catkin_make in the workspace; extra arguments go to catkin_make.
+# With ccache on PATH the compiler calls go through it, paths relative to the
+# clone (CCACHE_BASEDIR), so two clones of one tree share their objects.
 pc_ekf_catkin_make() {
   pc_ekf_prepare_workspace
+  local launcher=()
+  if command -v ccache >/dev/null 2>&1 && [ "${PC_EKF_CCACHE:-1}" != 0 ]; then
+    export CCACHE_BASEDIR="$PC_EKF_ROOT" CCACHE_NOHASHDIR=1
+    launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
+  fi
   (cd "$PC_EKF_WS" && catkin_make -DCMAKE_BUILD_TYPE="${PC_EKF_BUILD_TYPE:-Release}" \
-     -DCATKIN_ENABLE_TESTING=ON "$@" -j"$(nproc)")
+     -DCATKIN_ENABLE_TESTING=ON "${launcher[@]}" "$@" -j"$(nproc)")
 }
 
 # Builds from the sources (log .build/build.log; arguments go to catkin_make);
