@@ -36,6 +36,8 @@ SYSTEM_KEYS = {
     "python3-matplotlib": ["/usr/lib/python3/dist-packages/matplotlib/__init__.py"],
     "python3-tk": ["/usr/lib/python3.11/tkinter/__init__.py"],
     "nlohmann-json-dev": ["/usr/include/nlohmann/json.hpp"],
+    "python3-distributed": ["/usr/lib/python3/dist-packages/distributed/__init__.py"],
+    "python3-yaml": ["/usr/lib/python3/dist-packages/yaml/__init__.py"],
 }
 
 # Commands run by the scripts and the README that the word scan below does
@@ -43,6 +45,7 @@ SYSTEM_KEYS = {
 EXTRA_COMMANDS = [
     "cmake", "make", "g++", "clang", "clang++", "llvm-symbolizer", "colcon",
     "setsid", "timeout", "pgrep", "dpkg-query", "apt-cache",
+    "dask-scheduler", "dask-worker",  # lib/fleet_test.sh, docs/fleet.md (estimate_fleet)
 ]
 
 
