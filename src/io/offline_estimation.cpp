@@ -1,6 +1,7 @@
 #include "pc_ekf/io/offline_estimation.h"
 
 #include <chrono>
+#include <future>
 #include <stdexcept>
 
 #include "pc_ekf/filter/batch_update.h"
@@ -8,6 +9,7 @@
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/pc/pdf_sampler.h"
 
 namespace pc_ekf {
 
@@ -43,15 +45,19 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
   }
 }
 
-std::vector<Histogram> pcPdfs(const EstimatorConfig& c, const PolynomialBasis& basis,
-                              const Eigen::MatrixXd& coeffs) {
-  std::vector<Histogram> pdfs;
-  if (!coeffs.allFinite()) return pdfs;
-  for (Eigen::Index i = 0; i < coeffs.rows(); ++i) {
-    pdfs.push_back(pcHistogram(basis, coeffs.row(i).transpose(), c.pdf.draws, c.pdf.bins,
-                               c.pdf.seed + static_cast<std::uint64_t>(i)));
-  }
-  return pdfs;
+// The final PDFs: one set of pdf.seed germ draws for every parameter. The
+// draws do not depend on the data, so the sampler is built on a second
+// thread while the filter runs (same numbers whatever the timing).
+using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
+PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, const PolynomialBasis& basis) {
+  return std::async(std::launch::async, [&c, &basis] {
+    return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+  });
+}
+std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {
+  const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
+  if (!coeffs.allFinite()) return {};
+  return s->histograms(coeffs);
 }
 
 Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
@@ -74,6 +80,7 @@ Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
 
 void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
                 std::shared_ptr<const PcPropagator> prop, OfflineResult* r) {
+  const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
   const OneStepSettings settings = makeOneStepSettings(c);
   OneStepFilter filter(prop, settings);
   StepResult last;
@@ -97,7 +104,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   r->loo_channels = c.model_type->channelNames();
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);
-  r->pdfs = pcPdfs(c, prop->basis(), last.coefficients);
+  r->pdfs = pcPdfs(pdf_sampler, last.coefficients);
   r->integrations = prop->integrations();
   for (const auto& w : last.health.warnings()) r->warnings.push_back(w);
   if (r->rejected_samples) {
@@ -152,13 +159,14 @@ void checkPrediction(const EstimatorConfig& c, const MeasurementSeries& series,
 void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
               std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
               OfflineResult* r) {
+  const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
   const BatchResult b =
       batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
   SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
                    b.coefficients, b.nis, false, true, b.finite && b.forecast.ok, {}};
   r->records.push_back(rec);
   summarise(c, b.mean, b.stddev, r);
-  r->pdfs = pcPdfs(c, prop->basis(), b.coefficients);
+  r->pdfs = pcPdfs(pdf_sampler, b.coefficients);
   r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
   r->healthy = b.finite && b.forecast.ok;
   if (!b.forecast.first_problem.empty()) r->warnings.push_back(b.forecast.first_problem);

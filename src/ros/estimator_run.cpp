@@ -116,12 +116,8 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   }
 
   if (pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite()) {
-    std::vector<Histogram> histograms;
-    for (Eigen::Index i = 0; i < r.coefficients.rows(); ++i) {
-      histograms.push_back(
-          pdfs_->histogram(static_cast<int>(i), r.coefficients.row(i).transpose()));
-    }
-    out.pdf = pdfMessage(propagator_->mapping().names(), histograms, {}, r.index, stamp);
+    out.pdf = pdfMessage(propagator_->mapping().names(), pdfs_->histograms(r.coefficients), {},
+                         r.index, stamp);
   }
   return out;
 }

@@ -86,8 +86,8 @@ int run(const Options& o) {
   ts.analytic_interval = o.dt;
   EstimatorTimeline timeline(ts);
   const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>()));
-  const auto pdfs = std::make_shared<ParameterPdfSampler>(
-      prior->basis(), prior->parameterCount(), c.pdf.draws, c.pdf.bins, c.pdf.seed);
+  const auto pdfs =
+      std::make_shared<ParameterPdfSampler>(prior->basis(), c.pdf.draws, c.pdf.bins, c.pdf.seed);
   std::unique_ptr<EstimatorRun> run;
 
   const ros::Time origin(1000000, 0);
