@@ -42,6 +42,10 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
   }
 }
 
+std::shared_ptr<const PcPropagator> PcPropagator::withThreads(int threads) const {
+  return std::make_shared<const PcPropagator>(model_, basis_, design_, mapping_, settings_, threads);
+}
+
 Eigen::MatrixXd PcPropagator::priorState() const {
   return stateFor(mapping_.priorCoefficients(basis_));
 }

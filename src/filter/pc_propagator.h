@@ -70,6 +70,11 @@ class PcPropagator {
   Eigen::MatrixXd project(const Eigen::MatrixXd& values, const std::vector<bool>& usable,
                           ForecastReport* report) const;
 
+  // The same forecast (bit for bit: the result does not depend on the thread
+  // count) on `threads` threads of its own, sharing the model: for a second
+  // thread that forecasts while this propagator is in use.
+  std::shared_ptr<const PcPropagator> withThreads(int threads) const;
+
   long integrations() const { return integrations_; }
   int threads() const { return workers_ ? workers_->threads() : 1; }
   // Fewest points of a part of the parallel forecast (two parts per thread,
