@@ -45,11 +45,10 @@ void zeroNonFinite(ParameterEstimate& msg) {
 }
 
 EstimatorRun::EstimatorRun(const EstimatorConfig& config,
-                           std::shared_ptr<const PcPropagator> propagator,
-                           std::shared_ptr<const ParameterPdfSampler> pdfs)
+                           std::shared_ptr<const PcPropagator> propagator, bool pdfs)
     : config_(config),
       propagator_(propagator),
-      pdfs_(std::move(pdfs)),
+      pdfs_(pdfs),
       full_(propagator, makeOneStepSettings(config)),
       decimated_(propagator, makeOneStepSettings(config)) {}
 
@@ -72,6 +71,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   const Eigen::MatrixXd before = full_.state();
   const double time_before = full_.time();
   StepResult r = full_.process(m);
+  pending_swap_ = r.rerun_pending ? r.rerun_swap_after : 0;
   const bool singular = r.update.singular;
   if (!finiteResult(r)) {
     // Keep the filter usable: the sample is skipped, its index still counted.
@@ -116,8 +116,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   }
 
   if (pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite()) {
-    out.pdf = pdfMessage(propagator_->mapping().names(), pdfs_->histograms(r.coefficients), {},
-                         r.index, stamp);
+    out.pdf = PdfRequest{r.coefficients, static_cast<std::uint32_t>(r.index), stamp};
   }
   return out;
 }

@@ -118,8 +118,12 @@ int run(const Options& o) {
     if (timeline.addSample(stamp, m, now) != StampVerdict::kAccepted) ++dropped;
     DroppedSamples lost;
     for (const ReleasedSample& s : timeline.release(now, &lost)) {
-      if (!run) run = std::make_unique<EstimatorRun>(c, makePropagator(c, makeModel(c, timeline.road())), pdfs);
+      if (!run)
+        run = std::make_unique<EstimatorRun>(c, makePropagator(c, makeModel(c, timeline.road())),
+                                             true);
       const SampleEstimate e = run->process(s.measurement, s.stamp);
+      // The node draws these on its PDF worker; here inline (same numbers).
+      if (e.pdf) parameterPdf(*pdfs, prior->mapping().names(), *e.pdf);
       timeline.keepRoadFrom(run->oldestTime());
       ++processed;
       unhealthy += !e.estimate.healthy;
