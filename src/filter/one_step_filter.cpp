@@ -132,6 +132,12 @@ OneStepFilter::~OneStepFilter() = default;
 
 void OneStepFilter::cancelRerun() { rerun_.reset(); }
 
+void OneStepFilter::setRerun(std::shared_ptr<const PcPropagator> propagator,
+                             std::function<void()> before_feed) {
+  rerun_propagator_ = std::move(propagator);
+  before_feed_ = std::move(before_feed);
+}
+
 void OneStepFilter::startRelinearization() {
   cancelRerun();
   kept_.clear();
@@ -193,6 +199,7 @@ StepResult OneStepFilter::process(const Measurement& m) {
   }
   kept_.push_back(m);
   if (rerun_) {  // a deferred re-run: feed it; no other restart meanwhile
+    if (before_feed_) before_feed_();
     rerun_->add(m);
     if (samples_ < swap_after_) {
       r.rerun_pending = true;
@@ -253,6 +260,7 @@ void OneStepFilter::deferRelinearization(const StepResult& r, const Eigen::Array
       static_cast<int>(std::ceil(settings_.relinearize.defer * static_cast<double>(kept)));
   swap_after_ = samples_ + delay;
   if (!rerun_propagator_) rerun_propagator_ = propagator_->withThreads(1);
+  if (before_feed_) before_feed_();
   rerun_ = std::make_unique<DeferredRerun>(rerun_propagator_, settings_, x0, kept_,
                                            kept + delay);
 }

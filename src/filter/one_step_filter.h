@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -76,6 +77,11 @@ class OneStepFilter {
   int rejected() const { return rejected_; }
   // Earliest time the filter may still need the road from (a re-run).
   double roadNeededFrom() const { return relinearizing_ ? 0.0 : t_; }
+  // Deferred re-runs: their propagator (default: a single-threaded copy of
+  // this one, sharing the model and its road) and a call made on this thread
+  // before the worker starts and before each sample it is fed (e.g. to hand
+  // it a newer copy of a road that grows).
+  void setRerun(std::shared_ptr<const PcPropagator> propagator, std::function<void()> before_feed);
   // Deferred re-runs (relinearize.defer > 0) whose worker had not finished
   // when their swap came, so that the sample waited for it.
   int lateSwaps() const { return late_swaps_; }
@@ -119,6 +125,7 @@ class OneStepFilter {
   Eigen::MatrixXd rerun_theta_;           // its working prior's parameter coefficients
   int swap_after_ = 0;                    // its swap: after this sample
   std::shared_ptr<const PcPropagator> rerun_propagator_;  // single-threaded copy
+  std::function<void()> before_feed_;
   int late_swaps_ = 0;
 };
 

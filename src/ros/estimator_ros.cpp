@@ -167,14 +167,10 @@ void EstimatorRos::startRun() {
   updateRunState();
 }
 
-EstimatorConfig EstimatorRos::runConfig() const {
-  EstimatorConfig c = config_;
-  if (timeline_.mode() == RoadMode::kTopic) c.safeguards.relinearize.defer = 0.0;
-  return c;
-}
-
 std::unique_ptr<EstimatorRun> EstimatorRos::makeRun() const {
-  return std::make_unique<EstimatorRun>(runConfig(), runPropagator(), pdfs_ != nullptr);
+  const bool topic = timeline_.mode() == RoadMode::kTopic;
+  return std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_ != nullptr,
+                                        topic ? timeline_.road() : nullptr);
 }
 
 std::shared_ptr<const PcPropagator> EstimatorRos::runPropagator() const {

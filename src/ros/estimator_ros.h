@@ -6,7 +6,8 @@
 // nodelet's single-threaded queue): nothing there is locked. Two threads of
 // the node's own hand work to it (docs/realtime.md): a receiver takes
 // joint_states off the subscription into inbox_ (so that the lag and queue
-// depth are known), and the PDF worker draws parameter_pdf messages.
+// depth are known), and the PDF worker draws parameter_pdf messages; the
+// filters' deferred re-runs have threads of their own (OneStepFilter).
 #pragma once
 
 #include <pc_ekf/RoadHeights.h>
@@ -66,9 +67,6 @@ class EstimatorRos {
   void updateRunState();
   // The filters' propagator for the current road mode (topic: the timeline's road).
   std::shared_ptr<const PcPropagator> runPropagator() const;
-  // The run's configuration: a topic road grows while a deferred re-run
-  // would read it, so there the re-run stays in the sample (defer 0).
-  EstimatorConfig runConfig() const;
   std::unique_ptr<EstimatorRun> makeRun() const;
   void resumeFromCheckpoint();
   // Hands the run's state to the writer thread (latest wins).

@@ -45,12 +45,22 @@ void zeroNonFinite(ParameterEstimate& msg) {
 }
 
 EstimatorRun::EstimatorRun(const EstimatorConfig& config,
-                           std::shared_ptr<const PcPropagator> propagator, bool pdfs)
+                           std::shared_ptr<const PcPropagator> propagator, bool pdfs,
+                           std::shared_ptr<const SampledRoad> topic_road)
     : config_(config),
       propagator_(propagator),
       pdfs_(pdfs),
       full_(propagator, makeOneStepSettings(config)),
-      decimated_(propagator, makeOneStepSettings(config)) {}
+      decimated_(propagator, makeOneStepSettings(config)) {
+  if (topic_road && config.safeguards.relinearize.defer > 0.0) {
+    rerun_road_ = std::make_shared<RoadSnapshots>(std::move(topic_road));
+    const auto update = [road = rerun_road_] { road->update(); };
+    // One copy serves both filters' re-runs (each reads it, neither changes it).
+    full_.setRerun(makePropagator(config, makeModel(config, rerun_road_))->withThreads(1), update);
+    decimated_.setRerun(makePropagator(config, makeModel(config, rerun_road_))->withThreads(1),
+                        update);
+  }
+}
 
 double EstimatorRun::oldestTime() const {
   // A filter that may still re-linearise needs the road from its start.

@@ -18,6 +18,7 @@
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/pdf_sampler.h"
 #include "pc_ekf/ros/estimator_run_pdfs.h"
+#include "pc_ekf/ros/estimator_run_road.h"
 
 namespace pc_ekf {
 
@@ -41,9 +42,11 @@ struct BatchEstimate {
 
 class EstimatorRun {
  public:
-  // `pdfs` false: no parameter_pdf messages.
+  // `pdfs` false: no parameter_pdf messages. `topic_road`: the road of
+  // `propagator`'s model when it grows from road messages (a deferred re-run
+  // then reads copies of it, RoadSnapshots).
   EstimatorRun(const EstimatorConfig& config, std::shared_ptr<const PcPropagator> propagator,
-               bool pdfs);
+               bool pdfs, std::shared_ptr<const SampledRoad> topic_road = nullptr);
 
   // Forecast to m.time and update; m.time must not be before time().
   SampleEstimate process(const Measurement& m, const ros::Time& stamp);
@@ -78,6 +81,7 @@ class EstimatorRun {
   EstimatorConfig config_;
   std::shared_ptr<const PcPropagator> propagator_;
   bool pdfs_;
+  std::shared_ptr<RoadSnapshots> rerun_road_;  // topic road: the deferred re-runs' copies
   OneStepFilter full_;
   OneStepFilter decimated_;
   std::optional<Eigen::VectorXd> disagreement_;  // last multi-rate comparison
