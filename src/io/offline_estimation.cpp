@@ -160,23 +160,18 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
               std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
               OfflineResult* r) {
   const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
-  const BatchResult b =
-      batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
+  const BatchOutcome o = runBatchEstimate(c, *prop, series, alphas);
+  const BatchResult& b = o.result;
   SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
                    b.coefficients, b.nis, false, true, b.finite && b.forecast.ok, {}};
   r->records.push_back(rec);
   summarise(c, b.mean, b.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler, b.coefficients);
   r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
-  r->healthy = b.finite && b.forecast.ok;
-  if (!b.forecast.first_problem.empty()) r->warnings.push_back(b.forecast.first_problem);
-  if (b.damping < 1.0) {
-    r->damped_updates = 1;
-    r->healthy = false;
-    r->warnings.push_back("update damped to keep the parameter means in their prior support "
-                          "(model error, or a parameter that should be declared uncertain)");
-  }
-  checkPrediction(c, series, prop->model(), prop->mapping(), b.mean, r);
+  r->damped_updates = b.damping < 1.0;
+  r->predictive = o.predictive;
+  r->healthy = o.healthy;
+  r->warnings.insert(r->warnings.end(), o.warnings.begin(), o.warnings.end());
 }
 
 void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
@@ -227,6 +222,33 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
 }
 
 }  // namespace
+
+BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
+                              const MeasurementSeries& series, const std::vector<double>& alphas) {
+  BatchOutcome o;
+  o.result =
+      batchUpdate(propagator, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
+  const BatchResult& b = o.result;
+  o.healthy = b.finite && b.forecast.ok;
+  if (!b.forecast.first_problem.empty()) o.warnings.push_back(b.forecast.first_problem);
+  if (b.damping < 1.0) {
+    o.healthy = false;
+    o.warnings.push_back(
+        "update damped to keep the parameter means in their prior support "
+        "(model error, or a parameter that should be declared uncertain)");
+  }
+  if (c.health.predictive_check && !series.empty() && b.mean.allFinite()) {
+    const ParameterMapping& map = propagator.mapping();
+    o.predictive = posteriorPredictiveCheck(propagator.model(), map.fullParameters(b.mean), series,
+                                            makeNoiseModel(c), c.integration, map.count(),
+                                            c.health.nis_confidence);
+    if (o.predictive.outside) {
+      o.healthy = false;
+      o.warnings.push_back(o.predictive.warning(propagator.model().channelNames(), series));
+    }
+  }
+  return o;
+}
 
 OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,
                                    std::shared_ptr<const MechanicalModel> model,

@@ -6,6 +6,7 @@
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/predictive_check.h"
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/pc/pc_statistics.h"
 #include "pc_ekf/ros/message_conversion.h"
 
@@ -200,8 +201,10 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
                                          ? config_.es_mda.alphas
                                          : std::vector<double>{1.0};
   const MeasurementSeries series = batch_series_.series();
-  const BatchResult b = batchUpdate(*propagator_, series, makeNoiseModel(config_),
-                                    config_.update, alphas, config_.safeguards.support);
+  // estimate_offline's policy (runBatchEstimate); the node adds only what it
+  // publishes: nothing for a non-finite result or a failed forecast.
+  const BatchOutcome o = runBatchEstimate(config_, *propagator_, series, alphas);
+  const BatchResult& b = o.result;
   const bool finite =
       b.finite && b.mean.allFinite() && b.stddev.allFinite() && b.coefficients.allFinite();
   std::ostringstream s;
@@ -226,23 +229,15 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   msg.nis = b.nis;
   msg.nis_channels = static_cast<std::uint32_t>(b.observations);
   msg.band_nested = true;
-  msg.healthy = true;
   msg.damping = b.damping;
-  if (!b.forecast.first_problem.empty()) msg.warnings.push_back(b.forecast.first_problem);
-  if (b.damping < 1.0) {
-    msg.healthy = false;
-    msg.warnings.push_back("update damped to keep the parameter means in their prior support");
-  }
-  if (config_.health.predictive_check) {
-    const ParameterMapping& map = propagator_->mapping();
-    const PredictiveCheck p = posteriorPredictiveCheck(
-        propagator_->model(), map.fullParameters(b.mean), series, makeNoiseModel(config_),
-        config_.integration, map.count(), config_.health.nis_confidence);
-    setPredictiveCheck(msg, p, p.warning(propagator_->model().channelNames(), series));
-    if (p.available) {
-      s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper
-        << "]" << (p.outside ? " FAILED" : "");
-    }
+  const PredictiveCheck& p = o.predictive;
+  setPredictiveCheck(msg, p, "");  // its warning is among o.warnings
+  if (p.outside) msg.warnings.pop_back();
+  msg.healthy = o.healthy;
+  msg.warnings.insert(msg.warnings.end(), o.warnings.begin(), o.warnings.end());
+  if (p.available) {
+    s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper << "]"
+      << (p.outside ? " FAILED" : "");
   }
   s << (msg.healthy ? "; healthy" : "; NOT healthy");
   s.precision(9);
