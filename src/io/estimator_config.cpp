@@ -207,6 +207,7 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   l.number("width", rl.width, 0.0, kInf, true);
   l.integer("max_restarts", rl.max_restarts, 1, 100);
   l.integer("max_samples", rl.max_samples, 1, 100000000);
+  l.number("defer", rl.defer, 0.0, 1000.0);
   if (!(rl.shrink * rl.width < 1.0)) {
     l.fail("width", std::to_string(rl.width),
            "shrink x width < 1 (each restart must narrow the working prior)");
