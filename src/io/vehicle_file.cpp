@@ -2,7 +2,7 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <cstdio>
+#include <charconv>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -67,12 +67,9 @@ YAML::Node mergeVehicleFile(const YAML::Node& root, const std::string& source, s
 }
 
 std::string roundTripText(double v) {
-  char buffer[40];
-  for (int digits = 1; digits <= 17; ++digits) {
-    std::snprintf(buffer, sizeof(buffer), "%.*g", digits, v);
-    if (std::strtod(buffer, nullptr) == v) break;
-  }
-  return buffer;
+  char buffer[64];
+  const auto end = std::to_chars(buffer, buffer + sizeof(buffer), v).ptr;  // shortest exact
+  return std::string(buffer, end);
 }
 
 std::string vehicleFileText(const VehicleFile& f) {

@@ -10,6 +10,7 @@
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/tools/command_line.h"
+#include "pc_ekf/tools/record_input.h"
 
 namespace {
 
@@ -38,27 +39,11 @@ int main(int argc, char** argv) {
     std::uint64_t seed = config.truth.seed;
     int status = 0;
     if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
-    // A bag supplies the road (replacing the config's) and the samples.
-    std::shared_ptr<const ContactRoad> bag_road;
-    MeasurementSeries series;
-    if (args.has("--bag")) {
-      BagRecord bag = readBag(args["--bag"], bagReadOptions(config));
-      for (std::size_t i = 0; i < bag.warnings.size() && i < 5; ++i) {
-        std::cerr << "[bag] " << args["--bag"] << ": " << bag.warnings[i] << "\n";
-      }
-      if (bag.warnings.size() > 5) {
-        std::cerr << "[bag] ... and " << bag.warnings.size() - 5 << " more warnings\n";
-      }
-      bag_road = std::make_shared<SampledRoad>(bag.road_contacts.t, bag.road_contacts.heights);
-      series = std::move(bag.samples);
-    }
-    const auto model = makeModel(config, makeRoad(config, bag_road));
-    if (args.has("--measurements")) {
-      series = readMeasurementCsvFile(args["--measurements"], config.model_type->channelNames());
-    }
-    if (!args.has("--measurements") && !args.has("--bag")) {
-      series = synthesizeFromConfig(config, *model, seed);
-    }
+    const RecordInput record =
+        loadRecord(config, args.has("--bag") ? args["--bag"] : "",
+                   args.has("--measurements") ? args["--measurements"] : "", seed);
+    const auto& model = record.model;
+    const MeasurementSeries& series = record.series;
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
     const OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
     std::cout << toJson(result) << std::flush;
