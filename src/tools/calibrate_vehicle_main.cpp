@@ -114,6 +114,21 @@ int main(int argc, char** argv) {
       seed = config.truth.seed;
       if (!seed_text.empty()) seed = std::stoull(seed_text);
       RecordInput in = loadRecord(config, s.bag, s.csv, seed);
+      PriorSensitivity sensitivity;
+      std::vector<std::string> pruned;
+      if (records.empty()) {
+        config = sensitivityAndPrune(config, in, true, &sensitivity, &pruned);
+      } else if (config.tolerances_prune > 0.0) {  // the first record's choice holds for all
+        const auto& first = records.front().config.uncertain;
+        std::vector<UncertainParameter> kept;
+        for (const auto& u : config.uncertain) {
+          for (const auto& f : first) {
+            if (f.name == u.name) kept.push_back(u);
+          }
+        }
+        config.uncertain = kept;
+        config.tolerance_count = static_cast<int>(kept.size());
+      }
       const std::string label = !s.bag.empty()   ? "bag " + s.bag
                                 : !s.csv.empty() ? "measurements " + s.csv
                                                  : "synthetic data of " + s.config;

@@ -17,7 +17,10 @@ namespace {
 const char* kUsage =
     "usage: estimate_offline --config FILE.yaml [--measurements FILE.csv | --bag FILE.bag]\n"
     "                        [--method one_step|whole_set|es_mda|enkf|grid]\n"
-    "                        [--update paper|square_root] [--seed N] [--out DIR]\n";
+    "                        [--update paper|square_root] [--seed N] [--out DIR]\n"
+    "                        [--sensitivity]\n"
+    "  --sensitivity: total Sobol indices of every uncertain parameter on each observed\n"
+    "  channel (prior forecast over the record), a ranked table on stderr and in the JSON\n";
 
 }  // namespace
 
@@ -25,7 +28,8 @@ int main(int argc, char** argv) {
   using namespace pc_ekf;
   CommandLine args("estimate_offline", kUsage);
   const int parsed = args.parse(
-      argc, argv, {"--config", "--measurements", "--bag", "--method", "--update", "--seed", "--out"});
+      argc, argv, {"--config", "--measurements", "--bag", "--method", "--update", "--seed", "--out"},
+      {"--sensitivity"});
   if (parsed >= 0) return parsed;
   if (!args.has("--config")) return args.badInput(std::string("--config is required\n") + kUsage);
   if (args.has("--measurements") && args.has("--bag")) {
@@ -44,8 +48,13 @@ int main(int argc, char** argv) {
                    args.has("--measurements") ? args["--measurements"] : "", seed);
     const auto& model = record.model;
     const MeasurementSeries& series = record.series;
+    PriorSensitivity sensitivity;
+    std::vector<std::string> pruned;
+    config = sensitivityAndPrune(config, record, args.has("--sensitivity"), &sensitivity, &pruned);
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
-    const OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    if (args.has("--sensitivity")) result.sensitivity = sensitivity;
+    result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;
     if (args.has("--out")) writeOfflineOutputs(result, args["--out"]);
     return 0;

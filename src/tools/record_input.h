@@ -9,6 +9,7 @@
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/io/record_sensitivity.h"
 #include "pc_ekf/ros/bag_io.h"
 
 namespace pc_ekf {
@@ -38,6 +39,19 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   if (!csv.empty()) r.series = readMeasurementCsvFile(csv, config.model_type->channelNames());
   if (bag.empty() && csv.empty()) r.series = synthesizeFromConfig(config, *r.model, seed);
   return r;
+}
+
+// The record's sensitivity (printed as a table when `print`) and the config
+// with tolerances_prune applied; what was fixed is printed and kept in `pruned`.
+inline EstimatorConfig sensitivityAndPrune(const EstimatorConfig& config, const RecordInput& record,
+                                           bool print, PriorSensitivity* sensitivity,
+                                           std::vector<std::string>* pruned) {
+  if (!print && !(config.tolerances_prune > 0.0)) return config;
+  *sensitivity = recordSensitivity(config, record.model, sampleTimes(record.series));
+  if (print) std::cerr << sensitivityTable(*sensitivity);
+  const EstimatorConfig out = pruneTolerances(config, *sensitivity, pruned);
+  for (const auto& line : *pruned) std::cerr << "[tolerances_prune] " << line << "\n";
+  return out;
 }
 
 }  // namespace pc_ekf
