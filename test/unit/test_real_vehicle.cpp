@@ -59,6 +59,12 @@ YAML::Node studyNode(int vehicle, std::uint64_t seed) {
   c["truth"]["seed"] = seed;
   c["truth"]["sensor"]["noise_floor"] = c["measurement"]["sensor_std"];
   for (const auto& [name, value] : trueVehicle(vehicle)) c["truth"]["vehicle"][name] = value;
+  if (std::getenv("PC_EKF_STUDY_NINE")) {  // the nine values only, +-12 %, n = 11 (Q = 156)
+    YAML::Node nine(YAML::NodeType::Map);
+    for (const char* name : kNine) nine[name] = 0.12;
+    c["tolerances"] = nine;
+    c["collocation"]["points"] = 156;
+  }
   return c;
 }
 
