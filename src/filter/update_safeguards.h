@@ -2,7 +2,7 @@
 // generate (docs/method.md §5.6-5.8): the physical-domain rule (damp an update
 // whose parameter means would leave the prior support), parameter drift (a
 // random walk folded into the PC coefficients) and re-opening the uncertainty
-// after a persistent health violation. See the README, "Trust on real data".
+// after a persistent health violation. See docs/reliability.md, "Safeguards".
 #pragma once
 
 #include <Eigen/Dense>

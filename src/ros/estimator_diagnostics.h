@@ -31,7 +31,7 @@ struct EstimatorCounters {
   // non_finite, ignored = analytic road in use).
   std::map<std::string, std::uint64_t> road_rejected;
   std::uint64_t road_wait_expired = 0;   // processed with the road held at its last value
-  std::uint64_t non_finite_updates = 0;  // filter state restored (see README)
+  std::uint64_t non_finite_updates = 0;  // filter state restored (docs/nodes.md)
   std::uint64_t batch_not_kept = 0;      // beyond node.max_batch_samples
   std::uint64_t resets = 0;              // ~reset calls
   std::uint64_t time_jump_resets = 0;    // node.reset_on_time_jump

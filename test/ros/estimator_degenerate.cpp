@@ -1,4 +1,4 @@
-// Degenerate cases of EstimatorRun (README "Failure behaviour"): each has a
+// Degenerate cases of EstimatorRun (docs/reliability.md "Failure behaviour"): each has a
 // defined outcome and never puts a NaN on the wire.
 #include <limits>
 
