@@ -2,7 +2,6 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include <charconv>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
@@ -64,12 +63,6 @@ YAML::Node mergeVehicleFile(const YAML::Node& root, const std::string& source, s
   }
   if (path) *path = file;
   return out;
-}
-
-std::string roundTripText(double v) {
-  char buffer[64];
-  const auto end = std::to_chars(buffer, buffer + sizeof(buffer), v).ptr;  // shortest exact
-  return std::string(buffer, end);
 }
 
 std::string vehicleFileText(const VehicleFile& f) {

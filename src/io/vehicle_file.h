@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/io/number_text.h"
 
 namespace YAML {
 class Node;
@@ -33,9 +34,7 @@ struct VehicleFile {
   // vehicle value, the germ when it is not Beta(2, 2).
   std::vector<UncertainParameter> tolerances;
 };
-// YAML text of `file`; numbers in shortest round-trip form.
+// YAML text of `file`; numbers in shortest round-trip form (roundTripText).
 std::string vehicleFileText(const VehicleFile& file);
-// Shortest decimal text that reads back as `v`.
-std::string roundTripText(double v);
 
 }  // namespace pc_ekf

@@ -5,13 +5,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "pc_ekf/io/atomic_file.h"
 #include "pc_ekf/io/calibration.h"
 #include "pc_ekf/ros/model_plugins.h"
 #include "pc_ekf/tools/command_line.h"
@@ -46,17 +45,6 @@ std::vector<std::pair<std::string, std::string>> vehicleKeys(const std::string& 
     if (kv.second.IsScalar()) out.emplace_back(kv.first.Scalar(), kv.second.Scalar());
   }
   return out;
-}
-
-void writeAtomically(const std::string& path, const std::string& text) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::trunc);
-    out << text;
-    out.flush();
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-  }
-  std::filesystem::rename(tmp, path);
 }
 
 }  // namespace
@@ -165,7 +153,7 @@ int main(int argc, char** argv) {
     }
     const VehicleFile file =
         calibratedVehicleFile(result, last, vehicleKeys(last.source), header);
-    writeAtomically(out_path, vehicleFileText(file));
+    writeFileAtomically(out_path, vehicleFileText(file));
     for (const auto& u : result.tolerances) {
       std::cerr << "[calibrated] " << u.name << " = " << roundTripText(u.nominal) << " +- "
                 << u.nominal * u.relative_range * germStddev(u.germ) << "\n";
