@@ -13,6 +13,7 @@
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/pc_propagator.h"
 #include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/filter/prior_sensitivity.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/pc/pc_statistics.h"
@@ -67,6 +68,10 @@ struct OfflineResult {
   double band_nested_fraction = 1.0;
   long integrations = 0;  // point- or member-intervals, or full simulations (grid)
   double wall_seconds = 0.0;
+  // estimate_offline --sensitivity (empty parameters: not computed), and the
+  // tolerances that tolerances_prune fixed ("name: why").
+  PriorSensitivity sensitivity;
+  std::vector<std::string> pruned_tolerances;
   // Grid posterior only.
   int modes = 0;
   double border_mass = 0.0;
