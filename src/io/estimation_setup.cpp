@@ -93,6 +93,16 @@ EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>&
   return c;
 }
 
+std::shared_ptr<const ParameterPdfSampler> makePdfSampler(const EstimatorConfig& c,
+                                                          const PolynomialBasis& basis,
+                                                          int parameters) {
+  if (c.pdf.shared_draws) {
+    return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+  }
+  return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed,
+                                                     parameters);
+}
+
 NoiseModel makeNoiseModel(const EstimatorConfig& c) {
   NoiseModel n;
   n.rule = c.measurement.r_rule;

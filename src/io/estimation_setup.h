@@ -11,6 +11,7 @@
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/pc/pdf_sampler.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/model/roll_plane_model.h"
 
@@ -32,6 +33,11 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
 OneStepSettings makeOneStepSettings(const EstimatorConfig& c);
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c);
 NoiseModel makeNoiseModel(const EstimatorConfig& c);
+// The PDF sampler of pdf: (draws, bins, seed; shared or per-parameter draws)
+// for `parameters` rows in `basis`.
+std::shared_ptr<const ParameterPdfSampler> makePdfSampler(const EstimatorConfig& c,
+                                                          const PolynomialBasis& basis,
+                                                          int parameters);
 // The grid: section (and pdf.bins) as settings of the exact posterior.
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c);
 std::vector<int> channelIndices(const EstimatorConfig& c);

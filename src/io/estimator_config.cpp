@@ -258,6 +258,7 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   d.integer("draws", c.pdf.draws, 100, 100000000);
   d.integer("bins", c.pdf.bins, 2, 100000);
   d.unsignedInteger("seed", c.pdf.seed);
+  c.pdf.shared_draws = readFlag(d, "shared_draws", c.pdf.shared_draws);
   d.finish();
 }
 

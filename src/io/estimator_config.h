@@ -141,6 +141,9 @@ struct PdfConfig {
   int draws = 100000;
   int bins = 60;
   std::uint64_t seed = 11;
+  // One set of germ draws for every parameter (cost independent of n); false:
+  // parameter i draws with seed + i (the paper configs' numbers).
+  bool shared_draws = false;
 };
 
 // estimator_node only (section `node:`); the CLIs accept and ignore it.

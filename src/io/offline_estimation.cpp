@@ -45,13 +45,13 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
   }
 }
 
-// The final PDFs: one set of pdf.seed germ draws for every parameter. The
-// draws do not depend on the data, so the sampler is built on a second
+// The final PDFs (makePdfSampler: shared draws or seed + i per parameter).
+// The draws do not depend on the data, so the sampler is built on a second
 // thread while the filter runs (same numbers whatever the timing).
 using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
 PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, const PolynomialBasis& basis) {
   return std::async(std::launch::async, [&c, &basis] {
-    return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+    return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()));
   });
 }
 std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {

@@ -140,7 +140,27 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
   }
 }
 
+ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins,
+                                         std::uint64_t seed, int parameters)
+    : terms_(basis.size()), draws_(draws), bins_(bins) {
+  for (int i = 0; i < parameters; ++i) per_parameter_.emplace_back(basis, draws, bins, seed + i);
+}
+
 std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& coefficients) const {
+  if (!per_parameter_.empty()) {
+    if (coefficients.rows() != static_cast<Eigen::Index>(per_parameter_.size())) {
+      throw std::invalid_argument("ParameterPdfSampler: " + std::to_string(coefficients.rows()) +
+                                  " quantities for a sampler of " +
+                                  std::to_string(per_parameter_.size()) + " independent draw sets");
+    }
+    std::vector<Histogram> out;
+    for (std::size_t i = 0; i < per_parameter_.size(); ++i) {
+      std::vector<Histogram> h = per_parameter_[i].histograms(coefficients.row(i));
+      if (h.empty()) return {};
+      out.push_back(std::move(h.front()));
+    }
+    return out;
+  }
   if (coefficients.cols() != terms_) {
     throw std::invalid_argument("ParameterPdfSampler: " + std::to_string(coefficients.cols()) +
                                 " coefficients per quantity for a basis of " +

@@ -22,6 +22,11 @@ class ParameterPdfSampler {
   // The draws are sampleGerms(basis, draws, seed): pcHistogram(basis, c,
   // draws, bins, seed) of each parameter gives histograms()'s numbers.
   ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins, std::uint64_t seed);
+  // Independent draws per parameter (pdf.shared_draws: false): row i of
+  // histograms() uses sampleGerms(basis, draws, seed + i), as pcHistogram(...,
+  // seed + i) does; `parameters` rows, each at the cost of a shared call.
+  ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins, std::uint64_t seed,
+                      int parameters);
   // Histogram of each row of `coefficients` (quantities x S terms), binned
   // over its sample range; none when a coefficient is not finite.
   std::vector<Histogram> histograms(const Eigen::MatrixXd& coefficients) const;
@@ -36,6 +41,7 @@ class ParameterPdfSampler {
   // and left out of the products, which does not change their bits).
   std::vector<double> univariate_;
   std::vector<std::vector<int>> factors_;  // per term: rows of univariate_, ascending d
+  std::vector<ParameterPdfSampler> per_parameter_;  // independent draws: one per row
 };
 
 }  // namespace pc_ekf

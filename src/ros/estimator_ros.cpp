@@ -80,8 +80,8 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
     prior_propagator_ = analytic_propagator_;
   }
   if (config_.node.publish_pdf) {
-    pdfs_ = std::make_shared<ParameterPdfSampler>(prior_propagator_->basis(), config_.pdf.draws,
-                                                  config_.pdf.bins, config_.pdf.seed);
+    pdfs_ = makePdfSampler(config_, prior_propagator_->basis(),
+                           prior_propagator_->parameterCount());
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
   // Before any subscription: no callback may see the prior state.

@@ -98,6 +98,26 @@ TEST(PdfSampler, ManyTermsFollowTheBlockedSummationOfTheDenseProduct) {
   expectSameHistograms(basis, posteriorLike(2, 165, 5), 4100, 40, 2);
 }
 
+// pdf.shared_draws: false (the paper configs): parameter i draws with seed + i,
+// as estimate_offline's pcHistogram calls did, bit for bit.
+TEST(PdfSampler, IndependentDrawsPerParameterEqualPcHistogramAtSeedPlusI) {
+  const PolynomialBasis basis({kBeta22, kBeta22}, 4);
+  const Eigen::MatrixXd c = posteriorLike(2, basis.size(), 6);
+  const ParameterPdfSampler sampler(basis, 50000, 60, 11, 2);
+  const std::vector<Histogram> h = sampler.histograms(c);
+  ASSERT_EQ(h.size(), 2u);
+  for (int i = 0; i < 2; ++i) {
+    const Histogram old = pcHistogram(basis, c.row(i).transpose(), 50000, 60, 11 + i);
+    EXPECT_EQ(h[i].edges, old.edges) << i;
+    EXPECT_EQ(h[i].densities, old.densities) << i;
+  }
+  // The second parameter's draws differ from the shared set's.
+  const std::vector<Histogram> shared = ParameterPdfSampler(basis, 50000, 60, 11).histograms(c);
+  EXPECT_EQ(shared[0].densities, h[0].densities);
+  EXPECT_NE(shared[1].densities, h[1].densities);
+  EXPECT_THROW(sampler.histograms(c.topRows(1)), std::invalid_argument);
+}
+
 TEST(PdfSampler, ConstantExpansionGetsAUnitWidthBinAndUnitArea) {
   const PolynomialBasis basis({kBeta22, kBeta22}, 2);
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(1, basis.size());
