@@ -7,11 +7,18 @@
 // all within 3 reported std of the truth; a silent failure is a healthy miss.
 // 4 records in the suite; PC_EKF_FULL_CAR_RECORDS=N for the study of
 // docs/real_vehicle_reference.md, PC_EKF_STUDY_VERBOSE=1 prints every run.
+// Study switches (same loads and seeds): PC_EKF_FULL_CAR_EXACT_VEHICLE=1 gives
+// the truth the configured vehicle; PC_EKF_FULL_CAR_DESIGN=order,points
+// replaces the PC order and the number of Halton points;
+// PC_EKF_FULL_CAR_DUMP=DIR writes each record's config to DIR/record_R.yaml
+// (e.g. for bench_mcmc_reference's PC_EKF_MCMC_CONFIG).
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <random>
 
@@ -48,6 +55,15 @@ YAML::Node recordNode(int r) {
   std::vector<double> xi;
   for (int i = 0; i < 3; ++i) xi.push_back(load(rng));
   c["truth"]["xi"] = xi;
+  if (std::getenv("PC_EKF_FULL_CAR_EXACT_VEHICLE")) c["truth"].remove("vehicle");
+  if (const char* design = std::getenv("PC_EKF_FULL_CAR_DESIGN")) {
+    int order = 0, points = 0;
+    if (std::sscanf(design, "%d,%d", &order, &points) != 2) {
+      throw std::invalid_argument("PC_EKF_FULL_CAR_DESIGN: expected order,points");
+    }
+    c["pc"]["order"] = order;
+    c["collocation"]["points"] = points;
+  }
   return c;
 }
 
@@ -59,6 +75,10 @@ struct RecordRun {
 
 RecordRun estimate(int record, EstimationMethod method) {
   const YAML::Node node = recordNode(record);
+  if (const char* dir = std::getenv("PC_EKF_FULL_CAR_DUMP")) {
+    std::ofstream(std::string(dir) + "/record_" + std::to_string(record) + ".yaml")
+        << YAML::Dump(node) << "\n";
+  }
   const EstimatorConfig c = parseConfig(node, "full car record " + std::to_string(record));
   const auto model = makeModel(c, makeRoad(c));
   const MeasurementSeries data = synthesizeFromConfig(c, *model, c.truth.seed);
