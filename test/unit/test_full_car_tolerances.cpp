@@ -11,16 +11,19 @@
 // the truth the configured vehicle; PC_EKF_FULL_CAR_DESIGN=order,points
 // replaces the PC order and the number of Halton points;
 // PC_EKF_FULL_CAR_DUMP=DIR writes each record's config to DIR/record_R.yaml
-// (e.g. for bench_mcmc_reference's PC_EKF_MCMC_CONFIG).
+// (e.g. for bench_mcmc_reference's PC_EKF_MCMC_CONFIG);
+// PC_EKF_FULL_CAR_EXTRA=name=range,... adds tolerances (e.g. the cubic springs).
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
 #include <random>
+#include <sstream>
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
@@ -46,11 +49,27 @@ YAML::Node recordNode(int r) {
   c["measurement"]["noise_relative"] = c["measurement"]["r_relative"].as<double>();
   c["truth"]["seed"] = 100 + r;
   c["truth"]["sensor"]["noise_floor"] = c["measurement"]["sensor_std"];
+  if (const char* extra = std::getenv("PC_EKF_FULL_CAR_EXTRA")) {
+    // name=range,... more tolerances (their truth drawn off as well), Q = 2 S.
+    std::stringstream list(extra);
+    std::string item;
+    while (std::getline(list, item, ',')) {
+      const auto eq = item.find('=');
+      if (eq == std::string::npos) throw std::invalid_argument("PC_EKF_FULL_CAR_EXTRA: " + item);
+      c["tolerances"][item.substr(0, eq)] = std::stod(item.substr(eq + 1));
+    }
+    const int n = 3 + static_cast<int>(c["tolerances"].size());
+    c["collocation"]["points"] = (n + 1) * (n + 2);
+  }
   std::mt19937_64 rng(2000 + r);
   std::uniform_real_distribution<double> off(-0.06, 0.06), load(-0.8, 0.8);
   for (const auto& kv : c["tolerances"]) {
     const std::string name = kv.first.Scalar();
-    c["truth"]["vehicle"][name] = c["vehicle"][name].as<double>() * (1.0 + off(rng));
+    // A tolerance narrower than 6 % (body_mass: 3 %): off by up to its width,
+    // so that the truth stays inside it.
+    const double width = std::min(0.06, kv.second.as<double>());
+    const double draw = off(rng) * (width / 0.06);
+    c["truth"]["vehicle"][name] = c["vehicle"][name].as<double>() * (1.0 + draw);
   }
   std::vector<double> xi;
   for (int i = 0; i < 3; ++i) xi.push_back(load(rng));
