@@ -1,0 +1,86 @@
+// The 11-parameter reference of docs/real_vehicle_reference.md: one speed-bump
+// record (test/benchmarks/tolerances_n11.yaml: M, d_CG and nine tolerances,
+// data from a vehicle off by a few percent), estimated by one-step (square
+// root) and ES-MDA, and sampled by the long-chain MCMC reference
+// (mcmc_reference.h) on the same exact likelihood. Prints, per parameter, the
+// reference mean +- std (R-hat, ESS) and each filter's mean error and std
+// ratio in reference std units. Not part of bench.sh (minutes of wall time).
+//   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
+//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file)
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+
+#include "bench_support.h"
+#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/io/offline_estimation.h"
+
+namespace pc_ekf::bench {
+namespace {
+
+long envInt(const char* name, long fallback) {
+  const char* v = std::getenv(name);
+  return v ? std::atol(v) : fallback;
+}
+
+void BM_McmcReferenceN11(benchmark::State& state) {
+  const char* path = std::getenv("PC_EKF_MCMC_CONFIG");
+  const EstimatorConfig c = loadConfigFile(
+      path ? path : std::string(PC_EKF_SOURCE_DIR) + "/test/benchmarks/tolerances_n11.yaml");
+  const Scenario s = makeScenario(c, c.truth.seed);
+  const ParameterMapping mapping(*s.model, c.uncertain);
+  const OfflineResult one_step =
+      runOfflineEstimation(c, s.series, s.model, EstimationMethod::kOneStep, c.truth.seed);
+  const OfflineResult es_mda =
+      runOfflineEstimation(c, s.series, s.model, EstimationMethod::kEsMda, c.truth.seed);
+  McmcSettings ms;
+  ms.chains = static_cast<int>(envInt("PC_EKF_MCMC_CHAINS", 16));
+  ms.burn_in = static_cast<int>(envInt("PC_EKF_MCMC_BURN_IN", 4000));
+  ms.samples = static_cast<int>(envInt("PC_EKF_MCMC_SAMPLES", 20000));
+  ms.seed = static_cast<std::uint64_t>(envInt("PC_EKF_MCMC_SEED", 1));
+  // Mode search from the prior mean and both filters' estimates.
+  std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(mapping.count())};
+  for (const OfflineResult* r : {&one_step, &es_mda}) {
+    Eigen::VectorXd xi(mapping.count());
+    for (int i = 0; i < mapping.count(); ++i) xi[i] = r->parameters[i].xi_mean;
+    starts.push_back(xi);
+  }
+  McmcReference ref;
+  for (auto _ : state) {
+    ref =
+        runMcmcReference(*s.model, mapping, s.series, makeNoiseModel(c), c.integration, 2, starts,
+                         ms, [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); });
+  }
+  std::printf(
+      "MCMC: %d chains x (%d burn-in + %d kept), acceptance %.3f, scale %.2f, %ld "
+      "simulations, %.1f s; %d competing modes; one-step %.2f s healthy %d, ES-MDA %.2f s "
+      "healthy %d\n",
+      ms.chains, ms.burn_in, ms.samples, ref.acceptance, ref.proposal_scale, ref.simulations,
+      ref.seconds, ref.competing_modes, one_step.wall_seconds, one_step.healthy,
+      es_mda.wall_seconds, es_mda.healthy);
+  std::printf("%-22s %14s %12s %7s %7s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
+              "ref std", "R-hat", "ESS", "1step dz", "std/ref", "ESMDA dz", "std/ref", "truth dz");
+  // The truth of every parameter (load: truth.xi; tolerances: truth.vehicle).
+  const Eigen::VectorXd truth_full = truthParameters(c, *s.model);
+  const auto& all = s.model->parameterNames();
+  double worst = 0.0;
+  for (int i = 0; i < mapping.count(); ++i) {
+    const double m = ref.mean[i], sd = ref.stddev[i];
+    const ParameterSummary &a = one_step.parameters[i], &b = es_mda.parameters[i];
+    const double t = truth_full[std::find(all.begin(), all.end(), ref.names[i]) - all.begin()];
+    std::printf("%-22s %14.6g %12.4g %7.4f %7.0f | %9.3f %8.3f | %9.3f %8.3f | %9.3f\n",
+                ref.names[i].c_str(), m, sd, ref.r_hat[i], ref.effective_size[i], (a.mean - m) / sd,
+                a.stddev / sd, (b.mean - m) / sd, b.stddev / sd, (t - m) / sd);
+    worst = std::max(worst, ref.r_hat[i]);
+  }
+  state.counters["max_r_hat"] = worst;
+  state.counters["min_ess"] = ref.effective_size.minCoeff();
+  state.counters["simulations"] = static_cast<double>(ref.simulations);
+  state.counters["mcmc_s"] = ref.seconds;
+}
+BENCHMARK(BM_McmcReferenceN11)->Iterations(1)->Unit(benchmark::kSecond)->UseRealTime();
+
+}  // namespace
+}  // namespace pc_ekf::bench
+
+BENCHMARK_MAIN();

@@ -1,0 +1,212 @@
+// Sampling reference posterior (mcmc_reference.h): the convergence diagnostics
+// on sequences with known answers, the sampler on posteriors in closed form
+// (Gaussian prior x linear-Gaussian likelihood; Beta(2,2) prior alone), then
+// the two-parameter speed-bump case against the grid posterior.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <random>
+
+#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/filter/trajectory_simulation.h"
+#include "pc_ekf/model/roll_plane_model.h"
+
+namespace pc_ekf {
+namespace {
+
+GermSpec germ(GermFamily family) {
+  GermSpec g;
+  g.family = family;
+  g.alpha = 2.0;
+  g.beta = 2.0;
+  return g;
+}
+
+// r = L^-1 (xi - mu): likelihood N(mu, L L^T).
+class LinearResidual : public PosteriorResidual {
+ public:
+  LinearResidual(Eigen::VectorXd mu, Eigen::MatrixXd chol)
+      : mu_(std::move(mu)), l_(std::move(chol)) {}
+  int dimension() const override { return static_cast<int>(mu_.size()); }
+  Eigen::MatrixXd residuals(const Eigen::MatrixXd& xi) const override {
+    evaluations_ += xi.cols();
+    return l_.triangularView<Eigen::Lower>().solve(xi.colwise() - mu_);
+  }
+  long simulations() const override { return evaluations_; }
+
+ private:
+  Eigen::VectorXd mu_;
+  Eigen::MatrixXd l_;
+  mutable long evaluations_ = 0;
+};
+
+TEST(McmcDiagnostics, IndependentDrawsHaveFullSizeAndUnitRHat) {
+  std::mt19937_64 rng(7);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd c(4, 4000);
+  for (Eigen::Index j = 0; j < c.cols(); ++j) {
+    for (Eigen::Index i = 0; i < c.rows(); ++i) c(i, j) = normal(rng);
+  }
+  EXPECT_NEAR(effectiveSampleSize(c) / c.size(), 1.0, 0.1);
+  EXPECT_LT(splitRHat(c), 1.01);
+}
+
+TEST(McmcDiagnostics, AutoregressiveChainHasTheClosedFormSize) {
+  // AR(1) with coefficient phi: integrated autocorrelation (1 + phi) / (1 - phi).
+  const double phi = 0.9;
+  std::mt19937_64 rng(11);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd c(4, 40000);
+  for (Eigen::Index i = 0; i < c.rows(); ++i) {
+    double x = normal(rng) / std::sqrt(1.0 - phi * phi);  // stationary start
+    for (Eigen::Index j = 0; j < c.cols(); ++j) {
+      x = phi * x + normal(rng);
+      c(i, j) = x;
+    }
+  }
+  const double expected = c.size() * (1.0 - phi) / (1.0 + phi);
+  EXPECT_NEAR(effectiveSampleSize(c) / expected, 1.0, 0.1);
+  EXPECT_LT(splitRHat(c), 1.01);
+}
+
+TEST(McmcDiagnostics, ChainsAtDifferentLevelsOrADriftAreNotConverged) {
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  Eigen::MatrixXd apart(4, 1000), drift(1, 1000);
+  for (Eigen::Index j = 0; j < apart.cols(); ++j) {
+    for (Eigen::Index i = 0; i < apart.rows(); ++i)
+      apart(i, j) = normal(rng) + (i == 0 ? 2.0 : 0.0);
+    drift(0, j) = normal(rng) + 4.0 * j / 1000.0;  // one chain: its halves disagree
+  }
+  EXPECT_GT(splitRHat(apart), 1.1);
+  EXPECT_GT(splitRHat(drift), 1.1);
+  EXPECT_THROW(splitRHat(Eigen::MatrixXd(2, 3)), std::invalid_argument);
+}
+
+TEST(McmcReference, GaussianPriorTimesCorrelatedLikelihoodIsClosedForm) {
+  // Prior N(0, I), likelihood N(mu, S): posterior N(P S^-1 mu, P), P = (I + S^-1)^-1.
+  Eigen::Matrix3d s;
+  s << 0.04, 0.03, 0.0, 0.03, 0.09, -0.02, 0.0, -0.02, 0.25;
+  const Eigen::Vector3d mu(0.5, -0.3, 1.0);
+  const LinearResidual residual(mu, s.llt().matrixL());
+  const Eigen::Matrix3d p = (Eigen::Matrix3d::Identity() + s.inverse()).inverse();
+  const Eigen::Vector3d mean = p * s.inverse() * mu;
+  McmcSettings settings;
+  settings.burn_in = 1000;
+  settings.samples = 6000;
+  const std::vector<GermSpec> prior(3, germ(GermFamily::kGaussian));
+  const McmcReference r = runMcmcReference(residual, prior, {Eigen::Vector3d::Zero()}, settings);
+  for (int i = 0; i < 3; ++i) {
+    const double sd = std::sqrt(p(i, i));
+    EXPECT_NEAR(r.mode_xi[i], mean[i], 1e-6) << i;  // the posterior is Gaussian: mode = mean
+    EXPECT_NEAR(r.laplace_xi_stddev[i], sd, 1e-6) << i;
+    EXPECT_NEAR(r.xi_mean[i], mean[i], 5.0 * r.mean_error[i]) << i;
+    EXPECT_LT(r.mean_error[i], 0.03 * sd) << i;
+    EXPECT_NEAR(r.xi_stddev[i], sd, 0.05 * sd) << i;
+    EXPECT_LT(r.r_hat[i], 1.02) << i;
+    EXPECT_GT(r.effective_size[i], 1000.0) << i;
+  }
+  EXPECT_NEAR(r.xi_covariance(0, 1), p(0, 1), 0.1 * std::sqrt(p(0, 0) * p(1, 1)));
+  EXPECT_GT(r.acceptance, 0.15);
+  EXPECT_LT(r.acceptance, 0.35);
+  EXPECT_GE(r.simulations,
+            static_cast<long>(settings.chains) * (settings.burn_in + settings.samples));
+}
+
+TEST(McmcReference, UninformativeDataReturnTheBetaPrior) {
+  // Likelihood std 100 on a Beta(2,2) germ on [-1, 1]: the posterior is the
+  // prior, mean 0 and std 1/sqrt(5); proposals outside the support are refused.
+  const LinearResidual residual(Eigen::Vector2d::Zero(), 100.0 * Eigen::Matrix2d::Identity());
+  McmcSettings settings;
+  settings.burn_in = 1000;
+  settings.samples = 6000;
+  settings.seed = 5;
+  const std::vector<GermSpec> prior(2, germ(GermFamily::kBeta));
+  const McmcReference r = runMcmcReference(residual, prior, {Eigen::Vector2d(0.3, -0.2)}, settings);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(r.xi_mean[i], 0.0, 5.0 * r.mean_error[i]) << i;
+    EXPECT_NEAR(r.xi_stddev[i], 1.0 / std::sqrt(5.0), 0.03) << i;
+    EXPECT_LT(r.r_hat[i], 1.02) << i;
+    for (const auto& chain : r.draws) EXPECT_LE(chain.row(i).cwiseAbs().maxCoeff(), 1.0);
+  }
+}
+
+TEST(McmcReference, BadInputIsRefusedWithItsName) {
+  const LinearResidual residual(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());
+  const std::vector<GermSpec> prior(2, germ(GermFamily::kGaussian));
+  McmcSettings s;
+  EXPECT_THROW(
+      runMcmcReference(residual, {germ(GermFamily::kGaussian)}, {Eigen::Vector2d::Zero()}, s),
+      std::invalid_argument);
+  EXPECT_THROW(runMcmcReference(residual, prior, {}, s), std::invalid_argument);
+  EXPECT_THROW(runMcmcReference(residual, prior, {Eigen::Vector3d::Zero()}, s),
+               std::invalid_argument);
+  s.chains = 1;
+  EXPECT_THROW(runMcmcReference(residual, prior, {Eigen::Vector2d::Zero()}, s),
+               std::invalid_argument);
+}
+
+// Speed bump, N = 10, 1 % relative noise (test_reference_posterior's case):
+// the sampler on the vehicle's likelihood agrees with the grid posterior.
+TEST(McmcReference, SpeedBumpAgreesWithTheGridPosterior) {
+  const auto model = std::make_shared<RollPlaneModel>(
+      VehicleParameters(), std::make_shared<SpeedBumpRoad>(SpeedBumpSettings()));
+  const ParameterMapping mapping(*model,
+                                 {{"added_mass", 200.0, 0.5, germ(GermFamily::kBeta)},
+                                  {"added_mass_position", 0.762, 0.25, germ(GermFamily::kBeta)}});
+  const Eigen::Vector2d truth(0.2326, -0.3875);
+  std::vector<double> times;
+  for (int k = 1; k <= 10; ++k) times.push_back(0.3 * k);
+  const IntegratorSettings integration;
+  const auto z = simulateChannels(
+      *model, mapping.fullParameters(mapping.valuesAtGerms(truth.transpose())), times, integration);
+  std::mt19937_64 rng(2008);
+  std::normal_distribution<double> normal;
+  MeasurementSeries series;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    series.push_back({times[k], {0, 1, 2, 3}, z[k].col(0)});
+    for (int j = 0; j < 4; ++j) series[k].values[j] += 0.01 * std::abs(z[k](j, 0)) * normal(rng);
+  }
+  const NoiseModel noise{0.01, 1e-12};
+  ReferencePosteriorSettings grid;
+  grid.coarse_points = 41;
+  const ReferencePosterior g =
+      computeReferencePosterior(*model, mapping, series, noise, integration, grid);
+  McmcSettings settings;
+  settings.burn_in = 600;
+  settings.samples = 2500;
+  // The posterior has narrow local maxima besides the global one (the grid
+  // posterior's coarse stage exists for that): the mode search starts from a
+  // 5 x 5 grid over the prior and the chains sample the best basin.
+  std::vector<Eigen::VectorXd> starts;
+  for (double a : {-0.8, -0.4, 0.0, 0.4, 0.8}) {
+    for (double b : {-0.8, -0.4, 0.0, 0.4, 0.8}) starts.push_back(Eigen::Vector2d(a, b));
+  }
+  const McmcReference r =
+      runMcmcReference(*model, mapping, series, noise, integration, 2, starts, settings);
+  std::printf(
+      "grid M %.4f +- %.4f, d %.6f +- %.6f; mcmc M %.4f +- %.4f (mcse %.4f), d %.6f +- %.6f "
+      "(mcse %.6f); ESS %.0f %.0f, R-hat %.4f %.4f, %ld simulations, %.1f s\n",
+      g.mean[0], g.stddev[0], g.mean[1], g.stddev[1], r.mean[0], r.stddev[0], r.mean_error[0],
+      r.mean[1], r.stddev[1], r.mean_error[1], r.effective_size[0], r.effective_size[1], r.r_hat[0],
+      r.r_hat[1], r.simulations, r.seconds);
+  EXPECT_EQ(r.names, g.names);
+  ASSERT_EQ(g.modes.size(), 1u);
+  EXPECT_NEAR(r.mode_log_density, g.modes[0].log_density, 1e-6 * std::abs(g.modes[0].log_density));
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_NEAR(r.mean[i], g.mean[i], 5.0 * r.mean_error[i] + 0.01 * g.stddev[i]) << i;
+    EXPECT_NEAR(r.stddev[i], g.stddev[i], 0.1 * g.stddev[i]) << i;
+    EXPECT_LT(r.r_hat[i], 1.05) << i;
+    EXPECT_GT(r.effective_size[i], 400.0) << i;
+  }
+}
+
+}  // namespace
+}  // namespace pc_ekf
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
