@@ -34,6 +34,7 @@ EstimatorDiagnostics::EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle p
   updater_.add("input", this, &EstimatorDiagnostics::reportInput);
   updater_.add("filter health", this, &EstimatorDiagnostics::reportHealth);
   updater_.add("checkpoints and master", this, &EstimatorDiagnostics::reportUpkeep);
+  updater_.add("sensitivity", this, &EstimatorDiagnostics::reportSensitivity);
 }
 
 void EstimatorDiagnostics::setRunState(const std::string& road_mode, const std::string& origin,
@@ -181,6 +182,25 @@ void EstimatorDiagnostics::reportUpkeep(diagnostic_updater::DiagnosticStatusWrap
   s.add("master restarts (re-registered)", u.master_restarts);
   s.add("last re-registration (wall time)", u.master_last_change);
   s.add("last re-registration", u.master_last_report);
+}
+
+void EstimatorDiagnostics::reportSensitivity(diagnostic_updater::DiagnosticStatusWrapper& s) {
+  const PriorSensitivity& p = sensitivity_.indices;
+  if (p.parameters.empty()) {
+    s.summary(DiagnosticStatus::OK, "no tolerances: nothing to rank");
+    return;
+  }
+  std::ostringstream m;
+  const std::vector<int> order = p.ranking();
+  m << "largest total Sobol index: " << p.parameters[order.front()] << " "
+    << p.largestTotal(order.front()) << ", smallest: " << p.parameters[order.back()] << " "
+    << p.largestTotal(order.back());
+  if (!sensitivity_.pruned.empty()) m << "; " << sensitivity_.pruned.size() << " tolerances fixed";
+  s.summary(DiagnosticStatus::OK, m.str());
+  s.add("road", sensitivity_.road);
+  for (int i : order) s.add(p.parameters[i] + " (largest total index)", p.largestTotal(i));
+  for (const auto& line : sensitivity_.pruned) s.add("fixed", line);
+  if (!sensitivity_.note.empty()) s.add("note", sensitivity_.note);
 }
 
 }  // namespace pc_ekf

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "pc_ekf/filter/health.h"
+#include "pc_ekf/io/start_sensitivity.h"
 #include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {
@@ -93,6 +94,8 @@ class EstimatorDiagnostics {
   // `origin`: the stamp of t = 0 as sec.nsec, "" while not set.
   void setRunState(const std::string& road_mode, const std::string& origin, std::size_t pending,
                    std::size_t road_samples);
+  // Shown under "sensitivity": each uncertain parameter's largest total Sobol index.
+  void setSensitivity(const StartSensitivity& s) { sensitivity_ = s; }
   void publish() { updater_.force_update(); }
   double period() { return updater_.getPeriod(); }
 
@@ -101,6 +104,7 @@ class EstimatorDiagnostics {
   void reportInput(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportHealth(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportUpkeep(diagnostic_updater::DiagnosticStatusWrapper& s);
+  void reportSensitivity(diagnostic_updater::DiagnosticStatusWrapper& s);
 
   diagnostic_updater::Updater updater_;
   EstimatorConfig config_;
@@ -115,6 +119,7 @@ class EstimatorDiagnostics {
   std::string road_mode_ = "undecided";
   std::string origin_;
   std::size_t pending_ = 0, road_samples_ = 0;
+  StartSensitivity sensitivity_;
 };
 
 }  // namespace pc_ekf

@@ -64,7 +64,7 @@ void readCheckpointParams(const ros::NodeHandle& pnh, std::string& file, int& ev
 
 EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& name)
     : name_(name),
-      config_(loadRosConfig(pnh, &config_hash_)),
+      config_(loadRosConfig(pnh, &config_hash_, &start_sensitivity_)),
       nh_(nh),
       pnh_(pnh),
       timeline_(timelineSettings(config_)),
@@ -132,6 +132,7 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
                                node + "/get_loggers", node + "/set_logger_level",
                                node + "/load_nodelet", node + "/unload_nodelet", node + "/list"},
       kMasterCheckPeriod);
+  logStartSensitivity();
   ROS_INFO("%s: estimating from %s (road %s, update %s); config %s", name_.c_str(),
            nh_.resolveName("suspension/joint_states").c_str(),
            toString(config_.road.source).c_str(), toString(config_.update).c_str(),
@@ -153,6 +154,16 @@ EstimatorRos::~EstimatorRos() {
     ROS_INFO("%s: checkpoint %s written at sample %d (shutdown)", name_.c_str(),
              checkpoint_file_.c_str(), run_->samples());
   }
+}
+
+void EstimatorRos::logStartSensitivity() {
+  const StartSensitivity& s = start_sensitivity_;
+  diagnostics_.setSensitivity(s);
+  if (s.indices.parameters.empty()) return;
+  ROS_INFO("%s: sensitivity over %s; %s", name_.c_str(), s.road.c_str(),
+           sensitivityTable(s.indices).c_str());
+  for (const auto& line : s.pruned) ROS_INFO("%s: tolerances_prune: %s", name_.c_str(), line.c_str());
+  if (!s.note.empty()) ROS_WARN("%s: %s", name_.c_str(), s.note.c_str());
 }
 
 void EstimatorRos::startRun() {

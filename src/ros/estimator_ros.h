@@ -26,6 +26,7 @@
 #include "pc_ekf/filter/pc_propagator.h"
 #include "pc_ekf/io/background_writer.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/start_sensitivity.h"
 #include "pc_ekf/ros/estimator_diagnostics.h"
 #include "pc_ekf/ros/estimator_run.h"
 #include "pc_ekf/ros/estimator_timeline.h"
@@ -47,6 +48,9 @@ class EstimatorRos {
 
  private:
   // Receiver thread: queues the message and schedules processNext().
+  // The tolerances' sensitivity (computed while the config was loaded): once in
+  // the log, and on /diagnostics.
+  void logStartSensitivity();
   void onJointStateReceived(const sensor_msgs::JointState::ConstPtr& msg);
   // Main thread: the oldest queued joint_states message.
   void processNext();
@@ -76,6 +80,7 @@ class EstimatorRos {
 
   std::string name_;
   std::uint64_t config_hash_ = 0;  // set while config_ is loaded (declared before it)
+  StartSensitivity start_sensitivity_;  // likewise
   EstimatorConfig config_;
   SuspensionJoints joints_;
   ros::NodeHandle nh_, pnh_;

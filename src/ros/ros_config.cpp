@@ -80,7 +80,8 @@ void mergeYaml(YAML::Node& base, const YAML::Node& overlay) {
   }
 }
 
-EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* config_hash) {
+EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* config_hash,
+                              StartSensitivity* start) {
   const std::string ns = private_nh.getNamespace();
   std::string file;
   private_nh.getParam(kConfigFileParam, file);
@@ -115,6 +116,7 @@ EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* 
   EstimatorConfig config = parseConfig(root, source, modelRegistryWithPlugins());
   // The identity covers the vehicle file's contents, not only its name.
   if (config_hash) *config_hash = fnv1a64(canonicalConfigText(mergeVehicleFile(root, source, nullptr)));
+  if (start) *start = startSensitivity(config);
   return config;
 }
 

@@ -13,6 +13,7 @@
 #include <string>
 
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/start_sensitivity.h"
 
 namespace pc_ekf {
 
@@ -33,7 +34,11 @@ void mergeYaml(YAML::Node& base, const YAML::Node& overlay);
 // NodeHandle is `private_nh`. Throws ConfigError naming the key and value.
 // `config_hash` (optional): FNV-1a of canonicalConfigText() of the merged
 // YAML (file + private parameters), for checkpoints.
+// `start` (optional): the sensitivity the node reports once at start
+// (startSensitivity; tolerances_prune applied to the returned config where it
+// applies).
 EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh,
-                              std::uint64_t* config_hash = nullptr);
+                              std::uint64_t* config_hash = nullptr,
+                              StartSensitivity* start = nullptr);
 
 }  // namespace pc_ekf

@@ -27,6 +27,30 @@ TEST(EstimatorVehicleFile, TolerancesFromTheFileFollowTheLoad) {
   expectSameEstimate(estimates.messages().back(), offline, 1e-9, "one_step");
 }
 
+// The sensitivity the node reports at start (the config's sampling on its
+// analytic road) is estimate_offline --sensitivity's on the same record.
+TEST(EstimatorVehicleFile, SensitivityOnDiagnosticsEqualsEstimateOffline) {
+  ros::NodeHandle nh;
+  DiagnosticsWatcher diagnostics(nh);
+  const std::string status = "estimator_node: sensitivity";
+  const std::string key = "spring_linear_left (largest total index)";
+  ASSERT_TRUE(waitUntil([&] { return !diagnostics.value(status, key).empty(); }, 20.0));
+  const ToolRun r =
+      runCommand(std::string(PC_EKF_EXE_ESTIMATE_OFFLINE) + " --config " + kConfig + " --sensitivity");
+  ASSERT_EQ(r.status, 0) << r.err;
+  const nlohmann::json doc = nlohmann::json::parse(r.out);
+  ASSERT_EQ(doc.at("sensitivity").size(), 4u);
+  for (const auto& row : doc.at("sensitivity")) {
+    const std::string name = row.at("name").get<std::string>();
+    const std::string shown = diagnostics.value(status, name + " (largest total index)");
+    ASSERT_FALSE(shown.empty()) << name;
+    EXPECT_NEAR(std::stod(shown), row.at("largest_total").get<double>(),
+                1e-5 * row.at("largest_total").get<double>())  // shown with 6 digits
+        << name;
+  }
+  EXPECT_NE(r.err.find("total Sobol indices"), std::string::npos);  // the ranked table
+}
+
 }  // namespace
 }  // namespace pc_ekf::test
 
