@@ -137,7 +137,7 @@ std::vector<int> channelIndices(const EstimatorConfig& c) {
 std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
                                                   const MechanicalModel& model) {
   // Non-owning: the estimator's model is the caller's.
-  if (!c.truth.vehicle && !c.truth.model) {
+  if (!c.truth.model) {
     return std::shared_ptr<const MechanicalModel>(std::shared_ptr<void>(), &model);
   }
   const ContactRoad* road = model.contactRoad();

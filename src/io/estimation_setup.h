@@ -12,7 +12,6 @@
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/measurement_csv.h"
-#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 

@@ -381,13 +381,8 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
     }
   }
   if (override_vehicle) {
-    const auto p = c.model_type->read(v, *c.model);
+    c.truth.model = c.model_type->read(v, *c.model);
     v.finish();
-    if (c.rollPlane()) {
-      c.truth.vehicle = rollPlaneVehicle(*p);
-    } else {
-      c.truth.model = p;
-    }
   }
 
   const std::size_t kChannels = c.model_type->channelNames().size();
@@ -434,13 +429,17 @@ std::string toString(RoadSource s) {
   return "?";
 }
 
+std::vector<std::string> defaultJointNames(const ModelType& type) {
+  std::vector<std::string> names;
+  for (const auto& s : type.suspensions()) names.push_back(s.default_joint);
+  return names;
+}
+
 std::shared_ptr<const ModelParameters> EstimatorConfig::modelParameters() const {
-  if (rollPlane()) return rollPlaneParameters(vehicle);
   return model ? model : model_type->defaults();
 }
 
 std::shared_ptr<const ModelParameters> EstimatorConfig::truthModelParameters() const {
-  if (rollPlane()) return rollPlaneParameters(truth.vehicle ? *truth.vehicle : vehicle);
   return truth.model ? truth.model : modelParameters();
 }
 
@@ -482,7 +481,6 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
     c.model = c.model_type->read(v, *c.model_type->defaults());
     v.finish();
   }
-  if (c.rollPlane()) c.vehicle = rollPlaneVehicle(*c.model);
   c.uncertain = readUncertain(root, *c.model_type, *c.model);
   const int n = static_cast<int>(c.uncertain.size());
 

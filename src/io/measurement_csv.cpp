@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "pc_ekf/model/roll_plane_model.h"
+
 namespace pc_ekf {
 namespace {
 
@@ -96,8 +98,7 @@ std::ifstream openOrThrow(const std::string& path) {
 }  // namespace
 
 const std::vector<std::string>& rollPlaneChannels() {
-  static const std::vector<std::string> c{"u1", "u2", "v1", "v2"};
-  return c;
+  return rollPlaneDescription().channelNames();
 }
 
 MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,

@@ -198,10 +198,6 @@ SuspensionJoints suspensionJoints(const ModelType& type, const std::vector<std::
     out.joints.push_back({names[k], suspensions[k].position_channel, suspensions[k].velocity_channel});
   }
   out.channels = static_cast<int>(type.channelNames().size());
-  if (type.name() == "roll_plane") {
-    out.left = names[0];
-    out.right = names[1];
-  }
   return out;
 }
 
