@@ -216,10 +216,4 @@ ContactSeries sampleContactRoad(const ContactRoad& road, double t_end, double ra
   return r;
 }
 
-RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate) {
-  if (road.contactCount() != 2) throw std::invalid_argument("sampleRoad: a two-contact road expected");
-  const ContactSeries s = sampleContactRoad(road, t_end, rate);
-  return RoadSeries{s.t, s.heights[0], s.heights[1]};
-}
-
 }  // namespace pc_ekf
