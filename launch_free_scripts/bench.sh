@@ -30,8 +30,8 @@ started=$(date +%s)
 pc_ekf_ensure_packages || exit 1
 mkdir -p "$PC_EKF_ROOT/.build"
 benches=(bench_one_step bench_integrator bench_scaling bench_propagation bench_enkf bench_posterior
-         bench_checkpoint bench_odeint)
-node_targets=(estimator_node replay_node synthesize_bag bench_node_throughput)
+         bench_checkpoint bench_odeint bench_pdf)
+node_targets=(estimator_node replay_node synthesize_bag bench_node_throughput estimate_offline)
 pc_ekf_log "building in Release (log: .build/bench_build.log)"
 if ! PC_EKF_BUILD_TYPE=Release pc_ekf_catkin_make "${benches[@]}" \
      >"$PC_EKF_ROOT/.build/bench_build.log" 2>&1; then
@@ -68,6 +68,7 @@ if [ "$quick" = 1 ]; then
   run_bench bench_propagation --benchmark_filter='PcVersus|DesignDefault'
   run_bench bench_checkpoint --benchmark_filter='WhileCheckpointWritten|WithoutCheckpoint|Snapshot'
   run_bench bench_odeint
+  run_bench bench_pdf --benchmark_filter='PdfN11/'
 else
   run_bench bench_one_step
   run_bench bench_integrator
@@ -77,8 +78,15 @@ else
   run_bench bench_posterior
   run_bench bench_checkpoint
   run_bench bench_odeint
+  run_bench bench_pdf
 fi
 pc_ekf_log "running the node end to end"
 bash "$here/lib/bench_node.sh" "$bin" "$out/node" || pc_ekf_log "node benchmark failed"
+pc_ekf_log "running the n = 11 node at 1 kHz in real time"
+bash "$here/lib/bench_node.sh" "$bin" "$out/node_n11" n11 || pc_ekf_log "n = 11 node benchmark failed"
+pc_ekf_log "running estimate_offline end to end"
+rm -rf "$out/end_to_end"
+bash "$here/lib/bench_end_to_end.sh" "$PC_EKF_WS/devel/lib/pc_ekf" "$out/end_to_end" ||
+  pc_ekf_log "end-to-end benchmark failed"
 
 /usr/bin/python3 "$here/lib/bench_report.py" "$out" "$(($(date +%s) - started))"

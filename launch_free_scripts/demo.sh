@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The demo (README's first command): installs what is missing, builds, starts
+# The demo (the README's first command): installs what is missing, builds, starts
 # its own roscore on a free port, synthesises the paper's speed-bump data
 # into bags (N = 10 and N = 100 samples over 3 s, 1 % noise), replays each
 # through replay_node into estimator_node (lossless handshake, full speed),

@@ -12,7 +12,7 @@
 #                publishes the bag's relative topic names under NS
 #   --node-args  extra estimator_node arguments, e.g. "_node/joints/left:=fl"
 # The bag needs suspension/joint_states and, for road.source: topic,
-# road/profile (under NS when given); see README "Bags".
+# road/profile (under NS when given); see docs/tools.md and docs/method.md §8.2.
 set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/lib/common.sh"

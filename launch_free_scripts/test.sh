@@ -73,6 +73,11 @@ fi
 [ "$sanitize" -eq 0 ] && { bash "$here/lib/master_restart_test.sh" "$results" ||
                              pc_ekf_log "master restart test FAILED (log: .build/master_restart/)"; }
 
+# estimate_fleet on Dask: a scheduler and two workers on the loopback, one killed mid-run;
+# the LocalCluster path, resume after a killed run, --redo-errors (lib/fleet_test.sh).
+[ "$sanitize" -eq 0 ] && { bash "$here/lib/fleet_test.sh" "$results" ||
+                             pc_ekf_log "fleet test FAILED (log: .build/fleet/)"; }
+
 # The install list covers every package used (a fresh machine has only it).
 mkdir -p "$results"
 (pc_ekf_source_workspace && /usr/bin/python3 "$here/lib/check_install_list.py" \

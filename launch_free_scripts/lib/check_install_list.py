@@ -3,11 +3,11 @@
 Usage: check_install_list.py OUT.xml PACKAGE [PACKAGE ...]   (the install list)
 
 On a fresh machine only the install list (and what it pulls in) is there, so
-everything the build, the tests and the README's commands need must be owned
+everything the build, the tests and the commands of README.md and docs/ need must be owned
 by a Debian package in the closure of that list. For each thing used:
   - every dependency in package.xml (ROS packages via `rospack find`, system
     rosdep keys via a header or library they provide),
-  - every command the README and the scripts run (ros*, catkin_*, colcon,
+  - every command README.md, docs/*.md and the scripts run (ros*, catkin_*, colcon,
     `rosrun nodelet nodelet`, compilers and helpers),
   - every Python module imported by launch_free_scripts/lib/*.py and scripts/*,
 this finds the file it resolves to, the Debian package owning it (`dpkg -S`),
@@ -36,6 +36,8 @@ SYSTEM_KEYS = {
     "python3-matplotlib": ["/usr/lib/python3/dist-packages/matplotlib/__init__.py"],
     "python3-tk": ["/usr/lib/python3.11/tkinter/__init__.py"],
     "nlohmann-json-dev": ["/usr/include/nlohmann/json.hpp"],
+    "python3-distributed": ["/usr/lib/python3/dist-packages/distributed/__init__.py"],
+    "python3-yaml": ["/usr/lib/python3/dist-packages/yaml/__init__.py"],
 }
 
 # Commands run by the scripts and the README that the word scan below does
@@ -43,6 +45,7 @@ SYSTEM_KEYS = {
 EXTRA_COMMANDS = [
     "cmake", "make", "g++", "clang", "clang++", "llvm-symbolizer", "colcon",
     "setsid", "timeout", "pgrep", "dpkg-query", "apt-cache",
+    "dask-scheduler", "dask-worker",  # lib/fleet_test.sh, docs/fleet.md (estimate_fleet)
 ]
 
 
@@ -102,6 +105,9 @@ def package_xml_uses():
 
 def text_files():
     files = [os.path.join(ROOT, "README.md")]
+    docs = os.path.join(ROOT, "docs")
+    if os.path.isdir(docs):
+        files += [os.path.join(docs, n) for n in sorted(os.listdir(docs)) if n.endswith(".md")]
     for folder, _, names in os.walk(os.path.join(ROOT, "launch_free_scripts")):
         files += [os.path.join(folder, n) for n in names if n.endswith((".sh", ".py"))]
     files.append(os.path.join(ROOT, ".ci", "run"))

@@ -9,7 +9,7 @@ section is what differs. ES-MDA runs with config/vehicle_live.yaml's
 inflation schedule and the one-step filters with its re-linearisation in
 every row: the table judges the methods as they are configured for data from
 a real vehicle (the paper configs keep [4, 4, 4, 4] and no re-linearisation;
-what both cost there is measured in the README).
+what both cost there is measured in docs/results.md).
 """
 import os
 import sys

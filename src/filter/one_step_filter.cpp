@@ -1,8 +1,11 @@
 #include "pc_ekf/filter/one_step_filter.h"
 
 #include <cmath>
+#include <condition_variable>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <thread>
 
 #include "pc_ekf/pc/pc_statistics.h"
 
@@ -20,6 +23,87 @@ std::string measurementProblem(const Measurement& m, int channel_count) {
   if (!m.values.allFinite()) return "non-finite measurement value";
   return "";
 }
+
+// A deferred re-run (docs/realtime.md): a filter of its own, started from the
+// working prior on a single-threaded copy of the propagator, fed the kept
+// samples and then each new one by the filter that started it, on a thread
+// of its own. It stops after `target` samples: the swap sample.
+class DeferredRerun {
+ public:
+  DeferredRerun(std::shared_ptr<const PcPropagator> propagator, const OneStepSettings& settings,
+                const Eigen::MatrixXd& x0, std::vector<Measurement> samples, int target)
+      : filter_(std::move(propagator), withoutRelinearization(settings)),
+        samples_(std::move(samples)),
+        target_(target) {
+    filter_.x_ = x0;  // as relinearize(): the prior's time 0, no samples, health reset
+    thread_ = std::thread([this] { run(); });
+  }
+  ~DeferredRerun() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      cancelled_ = true;
+    }
+    wake_.notify_all();
+    if (thread_.joinable()) thread_.join();
+  }
+  void add(const Measurement& m) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      if (static_cast<int>(samples_.size()) < target_) samples_.push_back(m);
+    }
+    wake_.notify_all();
+  }
+  // Waits for the last sample; true when the worker was still busy.
+  bool finish() {
+    std::unique_lock<std::mutex> lock(mutex_);
+    const bool late = !done_;
+    done_wake_.wait(lock, [this] { return done_; });
+    return late;
+  }
+  OneStepFilter& filter() { return filter_; }
+  const StepResult& last() const { return last_; }
+  bool reopened() const { return reopened_; }
+  bool failed() const { return failed_; }
+
+ private:
+  static OneStepSettings withoutRelinearization(OneStepSettings s) {
+    s.relinearize.shrink = 0.0;  // the re-run itself does not restart
+    return s;
+  }
+  void run() {
+    for (int i = 0; i < target_; ++i) {
+      Measurement m;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        wake_.wait(lock, [&] { return cancelled_ || static_cast<int>(samples_.size()) > i; });
+        if (cancelled_) break;
+        m = samples_[static_cast<std::size_t>(i)];
+      }
+      try {
+        last_ = filter_.process(m);
+      } catch (const std::exception&) {
+        failed_ = true;  // checked samples: not expected; the swap is then skipped
+        break;
+      }
+      reopened_ = reopened_ || last_.reopened;
+    }
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      done_ = true;
+    }
+    done_wake_.notify_all();
+  }
+
+  OneStepFilter filter_;
+  std::vector<Measurement> samples_;  // guarded by mutex_
+  const int target_;
+  StepResult last_;
+  bool reopened_ = false, failed_ = false;
+  bool cancelled_ = false, done_ = false;  // guarded by mutex_
+  std::mutex mutex_;
+  std::condition_variable wake_, done_wake_;
+  std::thread thread_;
+};
 
 OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
                              const OneStepSettings& settings)
@@ -44,7 +128,18 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
   startRelinearization();
 }
 
+OneStepFilter::~OneStepFilter() = default;
+
+void OneStepFilter::cancelRerun() { rerun_.reset(); }
+
+void OneStepFilter::setRerun(std::shared_ptr<const PcPropagator> propagator,
+                             std::function<void()> before_feed) {
+  rerun_propagator_ = std::move(propagator);
+  before_feed_ = std::move(before_feed);
+}
+
 void OneStepFilter::startRelinearization() {
+  cancelRerun();
   kept_.clear();
   restarts_ = 0;
   relinearizing_ = settings_.relinearize.shrink > 0.0 && settings_.relinearize.max_restarts > 0;
@@ -53,6 +148,7 @@ void OneStepFilter::startRelinearization() {
 }
 
 void OneStepFilter::endRelinearization() {
+  cancelRerun();
   relinearizing_ = false;
   kept_.clear();
   kept_.shrink_to_fit();
@@ -68,6 +164,7 @@ double OneStepFilter::gateBound(int dof) {
 }
 
 void OneStepFilter::reset() {
+  cancelRerun();
   x_ = propagator_->priorState();
   t_ = 0.0;
   samples_ = 0;
@@ -101,38 +198,103 @@ StepResult OneStepFilter::process(const Measurement& m) {
     return r;
   }
   kept_.push_back(m);
+  if (rerun_) {  // a deferred re-run: feed it; no other restart meanwhile
+    if (before_feed_) before_feed_();
+    rerun_->add(m);
+    if (samples_ < swap_after_) {
+      r.rerun_pending = true;
+      r.rerun_swap_after = swap_after_;
+      return r;
+    }
+    return swapInRerun(r);
+  }
   // Due when a parameter has shrunk below `shrink` x its start; then every
   // parameter whose working prior would be narrower than its start moves.
   const RelinearizeSettings& rl = settings_.relinearize;
   const Eigen::ArrayXd start = start_stddev_.array();
   if (r.forecast.ok && (r.stddev.array() <= rl.shrink * start).any()) {
-    return relinearize(r, (rl.width * r.stddev.array() < start).cast<int>());
+    const Eigen::ArrayXi narrowed = (rl.width * r.stddev.array() < start).cast<int>();
+    if (rl.defer > 0.0) {
+      deferRelinearization(r, narrowed);
+      if (rerun_) {
+        r.rerun_pending = true;
+        r.rerun_swap_after = swap_after_;
+      }
+      return r;
+    }
+    return relinearize(r, narrowed);
   }
   if (static_cast<int>(kept_.size()) >= settings_.relinearize.max_samples) endRelinearization();
   return r;
 }
 
-StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed) {
+bool OneStepFilter::workingPrior(const StepResult& r, const Eigen::ArrayXi& narrowed,
+                                 Eigen::MatrixXd* theta, Eigen::MatrixXd* x0) {
   const RelinearizeSettings& rl = settings_.relinearize;
   // The parameters that have narrowed start again around their estimate; the
   // others keep the distribution they started from (the prior, at first).
-  Eigen::MatrixXd theta = propagator_->mapping().workingCoefficients(
-      propagator_->basis(), r.mean, rl.width * r.stddev);
-  for (int i = 0; i < theta.rows(); ++i) {
+  *theta = propagator_->mapping().workingCoefficients(propagator_->basis(), r.mean,
+                                                      rl.width * r.stddev);
+  for (int i = 0; i < theta->rows(); ++i) {
     if (!narrowed[i]) {
-      theta.row(i) = start_theta_.row(i);
-    } else if (pcStddev(theta.row(i))[0] <= 0.0) {
+      theta->row(i) = start_theta_.row(i);
+    } else if (pcStddev(theta->row(i))[0] <= 0.0) {
       endRelinearization();  // a mean on the support's edge: no working prior
-      return r;
+      return false;
     }
   }
-  Eigen::MatrixXd x0;
   try {
-    x0 = propagator_->stateFor(theta);
+    *x0 = propagator_->stateFor(*theta);
   } catch (const std::invalid_argument&) {
     endRelinearization();
-    return r;
+    return false;
   }
+  return true;
+}
+
+void OneStepFilter::deferRelinearization(const StepResult& r, const Eigen::ArrayXi& narrowed) {
+  Eigen::MatrixXd x0;
+  if (!workingPrior(r, narrowed, &rerun_theta_, &x0)) return;
+  const int kept = static_cast<int>(kept_.size());
+  const int delay =
+      static_cast<int>(std::ceil(settings_.relinearize.defer * static_cast<double>(kept)));
+  swap_after_ = samples_ + delay;
+  if (!rerun_propagator_) rerun_propagator_ = propagator_->withThreads(1);
+  if (before_feed_) before_feed_();
+  rerun_ = std::make_unique<DeferredRerun>(rerun_propagator_, settings_, x0, kept_,
+                                           kept + delay);
+}
+
+StepResult OneStepFilter::swapInRerun(const StepResult& live) {
+  late_swaps_ += rerun_->finish();
+  if (rerun_->failed()) {  // the live filter's result stands
+    endRelinearization();
+    return live;
+  }
+  OneStepFilter& f = rerun_->filter();
+  x_ = f.x_;
+  t_ = f.t_;
+  samples_ = f.samples_;
+  rejected_ = f.rejected_;
+  violations_ = f.violations_;
+  health_ = f.health_;
+  StepResult last = rerun_->last();
+  const bool reopened = rerun_->reopened();
+  rerun_.reset();
+  ++restarts_;
+  start_theta_ = rerun_theta_;
+  start_stddev_ = pcStddev(rerun_theta_);
+  if (restarts_ >= settings_.relinearize.max_restarts || reopened) endRelinearization();
+  last.relinearized = true;
+  last.restarts = restarts_;
+  last.rejected = rejected_;
+  return last;
+}
+
+StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed) {
+  const RelinearizeSettings& rl = settings_.relinearize;
+  Eigen::MatrixXd theta, x0;
+  if (!workingPrior(r, narrowed, &theta, &x0)) return r;
   const int restarts = restarts_ + 1;
   x_ = x0;
   t_ = 0.0;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -43,11 +44,22 @@ struct StepResult {
   int rejected = 0;       // samples gated or rolled back since the prior
   bool relinearized = false;  // the samples so far were re-run from a working prior
   int restarts = 0;           // re-linearisations since the prior
+  // relinearize.defer > 0: a re-run is under way on the worker (its state
+  // replaces the filter's after sample `rerun_swap_after`).
+  bool rerun_pending = false;
+  int rerun_swap_after = 0;
 };
 
+class DeferredRerun;
+
 class OneStepFilter {
+  friend class DeferredRerun;
+
  public:
   OneStepFilter(std::shared_ptr<const PcPropagator> propagator, const OneStepSettings& settings);
+  ~OneStepFilter();
+  OneStepFilter(const OneStepFilter&) = delete;
+  OneStepFilter& operator=(const OneStepFilter&) = delete;
 
   // Throws std::invalid_argument (state untouched) when the sample is before
   // the filter's time, has unknown/duplicate channels or non-finite values.
@@ -65,6 +77,14 @@ class OneStepFilter {
   int rejected() const { return rejected_; }
   // Earliest time the filter may still need the road from (a re-run).
   double roadNeededFrom() const { return relinearizing_ ? 0.0 : t_; }
+  // Deferred re-runs: their propagator (default: a single-threaded copy of
+  // this one, sharing the model and its road) and a call made on this thread
+  // before the worker starts and before each sample it is fed (e.g. to hand
+  // it a newer copy of a road that grows).
+  void setRerun(std::shared_ptr<const PcPropagator> propagator, std::function<void()> before_feed);
+  // Deferred re-runs (relinearize.defer > 0) whose worker had not finished
+  // when their swap came, so that the sample waited for it.
+  int lateSwaps() const { return late_swaps_; }
 
  private:
   std::shared_ptr<const PcPropagator> propagator_;
@@ -76,6 +96,14 @@ class OneStepFilter {
   StepResult step(const Measurement& m);
   // Re-runs the kept samples from a working prior around r; r when impossible.
   StepResult relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed);
+  // The working prior's parameter coefficients around r (false: none).
+  bool workingPrior(const StepResult& r, const Eigen::ArrayXi& narrowed, Eigen::MatrixXd* theta,
+                    Eigen::MatrixXd* x0);
+  // relinearize.defer > 0: starts the re-run of the kept samples on a worker.
+  void deferRelinearization(const StepResult& r, const Eigen::ArrayXi& narrowed);
+  // After the swap sample: the worker's state becomes the filter's.
+  StepResult swapInRerun(const StepResult& live);
+  void cancelRerun();
   void startRelinearization();
   void endRelinearization();
 
@@ -93,6 +121,12 @@ class OneStepFilter {
   Eigen::MatrixXd start_theta_;     // parameter coefficients at that start
   Eigen::VectorXd start_stddev_;
   int restarts_ = 0;
+  std::unique_ptr<DeferredRerun> rerun_;  // a deferred re-run under way
+  Eigen::MatrixXd rerun_theta_;           // its working prior's parameter coefficients
+  int swap_after_ = 0;                    // its swap: after this sample
+  std::shared_ptr<const PcPropagator> rerun_propagator_;  // single-threaded copy
+  std::function<void()> before_feed_;
+  int late_swaps_ = 0;
 };
 
 // Checks a measurement against a model's channels; "" when fine.

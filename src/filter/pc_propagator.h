@@ -70,6 +70,11 @@ class PcPropagator {
   Eigen::MatrixXd project(const Eigen::MatrixXd& values, const std::vector<bool>& usable,
                           ForecastReport* report) const;
 
+  // The same forecast (bit for bit: the result does not depend on the thread
+  // count) on `threads` threads of its own, sharing the model: for a second
+  // thread that forecasts while this propagator is in use.
+  std::shared_ptr<const PcPropagator> withThreads(int threads) const;
+
   long integrations() const { return integrations_; }
   int threads() const { return workers_ ? workers_->threads() : 1; }
   // Fewest points of a part of the parallel forecast (two parts per thread,
@@ -83,12 +88,17 @@ class PcPropagator {
   static constexpr long kBlock = 16;
 
  private:
-  // The forecast with every per-point step (X A^T, preparation, integration,
-  // the products with P and the leave-one-out residuals) split among the
-  // threads and the sums over points taken per block of kBlock points, the
-  // blocks added in order. False, x untouched, when some point is not usable
-  // (the general path then drops it).
-  bool forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1, ForecastReport* report) const;
+  // The forecast pipeline (pc_propagator_forecast.cpp) and how it splits its
+  // work: kUnsplit evaluates the points at once, integrates the usable ones
+  // in parts on the threads, projects them in one sum and drops unusable
+  // points (least squares on the rest); kBlocked gives each thread whole
+  // blocks of kBlock points and every per-point step of them (X A^T,
+  // preparation, integration, the products with P and the leave-one-out
+  // sums), the sums taken per block and the blocks added in order; it
+  // returns false, x untouched, when some point is not usable.
+  enum class ForecastSplit { kUnsplit, kBlocked };
+  bool forecastWith(ForecastSplit split, Eigen::MatrixXd& x, double t0, double t1,
+                    ForecastReport* report) const;
   void runParts(const std::vector<long>& bounds,
                 const std::function<void(int, long, long)>& job) const;
 

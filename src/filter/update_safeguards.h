@@ -2,7 +2,7 @@
 // generate (docs/method.md §5.6-5.8): the physical-domain rule (damp an update
 // whose parameter means would leave the prior support), parameter drift (a
 // random walk folded into the PC coefficients) and re-opening the uncertainty
-// after a persistent health violation. See the README, "Trust on real data".
+// after a persistent health violation. See docs/reliability.md, "Safeguards".
 #pragma once
 
 #include <Eigen/Dense>
@@ -41,6 +41,10 @@ struct RelinearizeSettings {
   double width = 20.0;
   int max_restarts = 4;
   int max_samples = 5000;  // samples kept for a re-run; more end re-linearisation
+  // Deferral (docs/realtime.md): a re-run due after sample k runs on a worker
+  // thread while the filter goes on, and its state replaces the filter's after
+  // sample k + ceil(defer x k). 0 = re-run within sample k.
+  double defer = 0.0;
 };
 
 // Largest gamma in [0, 1] such that before + gamma (after - before) keeps every

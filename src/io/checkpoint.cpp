@@ -1,21 +1,15 @@
 #include "pc_ekf/io/checkpoint.h"
 
-#include <fcntl.h>
-#include <unistd.h>
-#include <yaml-cpp/yaml.h>
-
-#include <algorithm>
-#include <cerrno>
-#include <charconv>
-#include <cmath>
-#include <cstdio>
+#include <cstdint>
 #include <cstdlib>
 #include <cstring>
-#include <filesystem>
-#include <fstream>
 #include <limits>
 #include <sstream>
 #include <vector>
+
+#include "pc_ekf/io/atomic_file.h"
+#include "pc_ekf/io/key_value_text.h"
+#include "pc_ekf/io/number_text.h"
 
 namespace pc_ekf {
 namespace {
@@ -26,14 +20,7 @@ constexpr const char* kCounterPrefix = "counter.";
 
 // ---- writing ----
 
-// Shortest text that reads back as the same double (std::to_chars): as
-// bit-exact as %.17g, shorter and faster (a checkpoint with 10^5 batch
-// samples: 334 -> 150 ms written and synced, 12 -> 11 MB).
-std::string number(double v) {
-  char text[40];
-  const auto r = std::to_chars(text, text + sizeof(text), v);
-  return std::string(text, r.ptr);
-}
+std::string number(double v) { return roundTripText(v); }
 
 std::string stampText(const CheckpointStamp& s) {
   return std::to_string(s.sec) + " " + std::to_string(s.nsec);
@@ -62,97 +49,16 @@ void writeFilter(std::ostream& out, const std::string& name, const FilterCheckpo
 
 // ---- reading ----
 
-// The file's "key = value" lines; each key is taken once by a reader below.
-class CheckpointText {
+[[noreturn]] void raiseCheckpointError(const std::string& message) {
+  throw CheckpointError(message);
+}
+
+// The checkpoint's value kinds on top of the generic reader.
+class CheckpointText : public KeyValueText {
  public:
-  explicit CheckpointText(const std::string& path) : path_(path) {
-    std::ifstream in(path);
-    if (!in) fail("cannot open the checkpoint file (" + std::string(std::strerror(errno)) + ")");
-    std::vector<std::string> lines;
-    for (std::string line; std::getline(in, line);) lines.push_back(line);
-    // Checked first: a cut-off file would otherwise fail on its last, partial line.
-    const auto end_line = std::find_if(lines.begin(), lines.end(), [](const std::string& l) {
-      return l.rfind(std::string(kEnd) + " = ", 0) == 0;
-    });
-    if (end_line == lines.end()) fail("no 'end' line: the file is truncated or not a checkpoint");
-    end_value_ = end_line->substr(std::strlen(kEnd) + 3);
-    if (std::any_of(end_line + 1, lines.end(), [](const std::string& l) { return !l.empty(); })) {
-      fail("text after the 'end' line");
-    }
-    for (auto it = lines.begin(); it != end_line; ++it) {
-      const std::string& line = *it;
-      const std::string where = "line " + std::to_string(it - lines.begin() + 1);
-      if (line.empty() || line[0] == '#') continue;
-      const std::size_t eq = line.find(" = ");
-      if (eq == std::string::npos) {
-        fail(where + ": expected 'key = value', got '" + line.substr(0, 60) + "'");
-      }
-      const std::string key = line.substr(0, eq);
-      if (!values_.emplace(key, line.substr(eq + 3)).second) {
-        fail(where + ": key '" + key + "' appears twice");
-      }
-    }
-  }
+  explicit CheckpointText(const std::string& path)
+      : KeyValueText(path, "checkpoint", kEnd, raiseCheckpointError) {}
 
-  [[noreturn]] void fail(const std::string& what) const {
-    throw CheckpointError("checkpoint " + path_ + ": " + what);
-  }
-  [[noreturn]] void fail(const std::string& key, const std::string& what) const {
-    fail("key '" + key + "': " + what);
-  }
-
-  // The value's whitespace-separated tokens; the key is consumed.
-  std::vector<std::string> tokens(const std::string& key) {
-    const auto it = values_.find(key);
-    if (it == values_.end()) fail(key, "missing");
-    std::istringstream in(it->second);
-    values_.erase(it);
-    std::vector<std::string> out;
-    for (std::string t; in >> t;) out.push_back(t);
-    if (out.empty()) fail(key, "empty value");
-    return out;
-  }
-  std::string text(const std::string& key) {
-    const auto t = tokens(key);
-    if (t.size() != 1) fail(key, "expected one word, got " + std::to_string(t.size()));
-    return t[0];
-  }
-
-  double real(const std::string& key, const std::string& token) const {
-    char* end = nullptr;
-    errno = 0;
-    const double v = std::strtod(token.c_str(), &end);
-    if (end == token.c_str() || *end != '\0' || !std::isfinite(v)) {
-      fail(key, "'" + token + "' is not a finite number");
-    }
-    return v;
-  }
-  std::uint64_t whole(const std::string& key, const std::string& token, std::uint64_t max) const {
-    char* end = nullptr;
-    errno = 0;
-    const unsigned long long v = std::strtoull(token.c_str(), &end, 10);
-    if (token.empty() || token[0] == '-' || end == token.c_str() || *end != '\0' ||
-        errno == ERANGE || v > max) {
-      fail(key, "'" + token + "' is not an integer in [0, " + std::to_string(max) + "]");
-    }
-    return v;
-  }
-  void count(const std::string& key, const std::vector<std::string>& t, std::size_t n) const {
-    if (t.size() != n) {
-      fail(key, "expected " + std::to_string(n) + " values, got " + std::to_string(t.size()));
-    }
-  }
-
-  double real(const std::string& key) {
-    const auto t = tokens(key);
-    count(key, t, 1);
-    return real(key, t[0]);
-  }
-  int integer(const std::string& key) {
-    const auto t = tokens(key);
-    count(key, t, 1);
-    return static_cast<int>(whole(key, t[0], std::numeric_limits<int>::max()));
-  }
   CheckpointStamp stamp(const std::string& key) {
     const auto t = tokens(key);
     count(key, t, 2);
@@ -198,84 +104,18 @@ class CheckpointText {
   // Counters, then nothing may be left.
   std::map<std::string, std::uint64_t> counters() {
     std::map<std::string, std::uint64_t> out;
-    for (auto it = values_.begin(); it != values_.end();) {
-      const std::string key = it->first;
+    for (const std::string& key : remainingKeys()) {
       if (key.rfind(kCounterPrefix, 0) != 0) fail(key, "unknown key");
-      const auto t = tokens(key);  // erases `it`
+      const auto t = tokens(key);
       count(key, t, 1);
       out[key.substr(std::strlen(kCounterPrefix))] =
           whole(key, t[0], std::numeric_limits<std::uint64_t>::max());
-      it = values_.lower_bound(key);
     }
     return out;
   }
-
-  const std::string& endValue() const { return end_value_; }
-
- private:
-  std::string path_;
-  std::string end_value_;  // full.samples, repeated as a completeness check
-  std::map<std::string, std::string> values_;
 };
 
-void flatten(const YAML::Node& n, const std::string& path, std::vector<std::string>& lines) {
-  const std::string at = path.empty() ? "(root)" : path;
-  switch (n.Type()) {
-    case YAML::NodeType::Map:
-      if (n.size() == 0) lines.push_back(at + " = {}");
-      for (const auto& kv : n) {
-        const std::string key = kv.first.as<std::string>();
-        flatten(kv.second, path.empty() ? key : path + "." + key, lines);
-      }
-      break;
-    case YAML::NodeType::Sequence:
-      if (n.size() == 0) lines.push_back(at + " = []");
-      for (std::size_t i = 0; i < n.size(); ++i) {
-        flatten(n[i], path + "[" + std::to_string(i) + "]", lines);
-      }
-      break;
-    case YAML::NodeType::Scalar:
-      lines.push_back(at + " = " + n.Scalar());
-      break;
-    default:
-      lines.push_back(at + " = ~");
-  }
-}
-
-void syncDirectory(const std::string& path) {
-  std::string dir = std::filesystem::path(path).parent_path().string();
-  if (dir.empty()) dir = ".";
-  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY);
-  if (fd < 0) return;  // durability of the rename only; the rename itself succeeded
-  ::fsync(fd);
-  ::close(fd);
-}
-
 }  // namespace
-
-std::uint64_t fnv1a64(const std::string& text) {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  for (unsigned char c : text) {
-    h ^= c;
-    h *= 0x100000001b3ull;
-  }
-  return h;
-}
-
-std::string hashText(std::uint64_t hash) {
-  char text[24];
-  std::snprintf(text, sizeof(text), "0x%016llx", static_cast<unsigned long long>(hash));
-  return text;
-}
-
-std::string canonicalConfigText(const YAML::Node& config) {
-  std::vector<std::string> lines;
-  flatten(config, "", lines);
-  std::sort(lines.begin(), lines.end());
-  std::string out;
-  for (const auto& l : lines) out += l + "\n";
-  return out;
-}
 
 void writeCheckpoint(const Checkpoint& c, const std::string& path) {
   std::ostringstream out;
@@ -314,32 +154,11 @@ void writeCheckpoint(const Checkpoint& c, const std::string& path) {
   out << kEnd << " = " << c.full.samples << "\n";
   const std::string text = out.str();
 
-  const std::string tmp = path + ".tmp";
-  const auto failed = [&](const std::string& what) {
-    const std::string reason = std::strerror(errno);
-    ::unlink(tmp.c_str());
-    throw CheckpointError("checkpoint " + path + ": " + what + " (" + reason + ")");
-  };
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  if (fd < 0) failed("cannot create " + tmp);
-  std::size_t written = 0;
-  while (written < text.size()) {
-    const ssize_t n = ::write(fd, text.data() + written, text.size() - written);
-    if (n < 0 && errno == EINTR) continue;
-    if (n <= 0) {
-      ::close(fd);
-      failed("cannot write " + tmp);
-    }
-    written += static_cast<std::size_t>(n);
+  try {
+    writeFileAtomically(path, text);
+  } catch (const AtomicWriteError& e) {
+    throw CheckpointError("checkpoint " + path + ": " + e.what());
   }
-  // On disk before the rename: a crash leaves the old checkpoint or the new one.
-  if (::fsync(fd) != 0) {
-    ::close(fd);
-    failed("cannot sync " + tmp);
-  }
-  if (::close(fd) != 0) failed("cannot close " + tmp);
-  if (std::rename(tmp.c_str(), path.c_str()) != 0) failed("cannot rename " + tmp + " to it");
-  syncDirectory(path);
 }
 
 void writeCheckpoint(const CheckpointSnapshot& s, const std::string& path) {

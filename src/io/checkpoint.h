@@ -1,9 +1,10 @@
 // estimator_node's checkpoint: the filter state of the current run, its
 // time origin and counters, and a hash of the configuration it was computed
-// under, as a small "key = value" text file. Doubles are written in their
-// shortest round-trip form so that a resumed filter continues bit-exactly.
-// Written to `path.tmp`, fsync'ed, then renamed over `path` (atomic on
-// POSIX): a reader sees the previous checkpoint or the new one, never half.
+// under (config_identity.h), as a small "key = value" text file. This file is
+// the format; doubles are written in their shortest round-trip form
+// (number_text.h) so that a resumed filter continues bit-exactly, the lines
+// are read by key_value_text.h, and the file is replaced atomically
+// (atomic_file.h): a reader sees the previous checkpoint or the new one, never half.
 #pragma once
 
 #include <Eigen/Dense>
@@ -15,11 +16,8 @@
 
 #include "pc_ekf/filter/kept_samples.h"
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/io/config_identity.h"  // config_hash = fnv1a64(canonicalConfigText(config))
 #include "pc_ekf/io/measurement_csv.h"
-
-namespace YAML {
-class Node;
-}
 
 namespace pc_ekf {
 
@@ -60,14 +58,6 @@ struct Checkpoint {
   std::map<std::string, std::uint64_t> counters;  // node counters by name ([a-z0-9_.])
 };
 
-// 64-bit FNV-1a: stable across runs, compilers and machines.
-std::uint64_t fnv1a64(const std::string& text);
-
-// The configuration as one "key.path = value" line per leaf, keys sorted:
-// the same text for the same parsed YAML whatever the comments, spacing and
-// key order of the file. Hash it with fnv1a64 for Checkpoint::config_hash.
-std::string canonicalConfigText(const YAML::Node& config);
-
 // Throws CheckpointError when the file cannot be written or renamed.
 void writeCheckpoint(const Checkpoint& c, const std::string& path);
 
@@ -88,7 +78,5 @@ Checkpoint readCheckpoint(const std::string& path);
 // Throws CheckpointError naming both hashes when `c` was written under
 // another configuration.
 void requireConfigHash(const Checkpoint& c, std::uint64_t current, const std::string& path);
-
-std::string hashText(std::uint64_t hash);  // 0x + 16 hex digits
 
 }  // namespace pc_ekf

@@ -38,9 +38,29 @@ std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
   return c.model_type->build(*c.modelParameters(), std::move(road));
 }
 
+void checkToleranceDomain(const EstimatorConfig& c, const MechanicalModel& model,
+                          const ParameterMapping& mapping) {
+  for (int i = c.loadCount(); i < mapping.count(); ++i) {
+    const UncertainParameter& u = mapping.uncertain()[i];
+    for (const double end : {mapping.lowerBound(i), mapping.upperBound(i)}) {
+      if (!std::isfinite(end)) continue;
+      Eigen::VectorXd v = model.nominalParameters();
+      v[model.parameterIndex(u.name)] = end;
+      const std::string why = model.invalidReason(v);
+      if (!why.empty()) {
+        throw ConfigError(c.source + ": key 'tolerances." + u.name + "': relative range " +
+                          std::to_string(u.relative_range) + " around " +
+                          std::to_string(u.nominal) + " reaches " + std::to_string(end) +
+                          ", outside the model's domain (" + why + ")");
+      }
+    }
+  }
+}
+
 std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model) {
   ParameterMapping mapping(*model, c.uncertain);
+  checkToleranceDomain(c, *model, mapping);
   const PolynomialBasis basis(mapping.germs(), c.pc_order, c.pc_truncation);
   const bool smolyak = c.collocation.sequence == PointSequence::kSmolyak;
   try {

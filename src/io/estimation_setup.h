@@ -39,6 +39,10 @@ std::vector<int> channelIndices(const EstimatorConfig& c);
 // the configured vehicle's value, relative_range `range`, a Beta(2,2) germ,
 // the truth at germ coordinate `xi_truth` (how the scaling benchmarks and
 // tests grow n). Throws ConfigError for a name the model does not have.
+// ConfigError when a tolerance's support leaves the model's physical domain.
+void checkToleranceDomain(const EstimatorConfig& c, const MechanicalModel& model,
+                          const ParameterMapping& mapping);
+
 EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>& names,
                               double range, double xi_truth);
 

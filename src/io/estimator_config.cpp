@@ -9,6 +9,8 @@
 #include <set>
 #include <sstream>
 
+#include "pc_ekf/io/tolerances.h"
+#include "pc_ekf/io/vehicle_file.h"
 #include "pc_ekf/io/yaml_reader.h"
 #include "pc_ekf/pc/polynomial_basis.h"
 
@@ -17,30 +19,15 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-GermSpec readGerm(YamlMapReader r) {
-  GermSpec g;
-  std::string family = "beta";
-  r.text("family", family);
-  try {
-    g.family = germFamilyFromString(family);
-  } catch (const std::invalid_argument&) {
-    r.fail("family", "'" + family + "'", "beta, uniform, gaussian or gamma");
-  }
-  if (g.family == GermFamily::kBeta || g.family == GermFamily::kGamma) {
-    r.number("alpha", g.alpha, 0.0, kInf, true);
-  }
-  if (g.family == GermFamily::kBeta) r.number("beta", g.beta, 0.0, kInf, true);
-  r.finish();
-  return g;
-}
-
 std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const ModelType& type,
                                               const ModelParameters& parameters) {
   std::vector<UncertainParameter> out;
   const YAML::Node seq = root.sequence("uncertain");
-  if (!seq.IsDefined() || seq.IsNull() || seq.size() == 0) {
-    root.fail("uncertain", "(empty)", "a list of at least one uncertain parameter");
+  if ((!seq.IsDefined() || seq.IsNull() || seq.size() == 0) && !root.has("tolerances")) {
+    root.fail("uncertain", "(empty)",
+              "a list of at least one uncertain parameter (or tolerances: on model values)");
   }
+  if (!seq.IsDefined() || seq.IsNull()) return out;
   const auto& names = type.parameterNames();
   const Eigen::VectorXd& values = parameters.values;
   std::set<std::string> seen;
@@ -58,7 +45,7 @@ std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const ModelTy
     u.nominal = values[it - names.begin()];
     r.number("nominal", u.nominal, -kInf, kInf);
     r.number("relative_range", u.relative_range, 0.0, kInf, true);
-    u.germ = readGerm(r.map("germ"));
+    u.germ = readGermSpec(r.map("germ"));
     r.finish();
     out.push_back(u);
   }
@@ -181,12 +168,15 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   } catch (const std::invalid_argument&) {
     f.fail("support", "'" + support + "'", "damp or ignore");
   }
-  const std::size_t n = c.uncertain.size();
+  const std::size_t n = c.uncertain.size(), loads = c.loadCount();
   f.numberList("drift", s.drift, 0, n);
-  if (!s.drift.empty() && s.drift.size() != n) {
+  if (!s.drift.empty() && s.drift.size() != n && s.drift.size() != loads) {
     f.fail("drift", "a list of " + std::to_string(s.drift.size()),
-           "one random-walk intensity per uncertain parameter (" + std::to_string(n) + ")");
+           "one random-walk intensity per uncertain parameter (" + std::to_string(loads) +
+               (n != loads ? ", or " + std::to_string(n) + " with the tolerances" : std::string()) +
+               ")");
   }
+  s.drift.resize(s.drift.empty() ? 0 : n, 0.0);  // tolerances: vehicle values do not drift
   for (double d : s.drift) {
     if (!(d >= 0.0) || !std::isfinite(d)) f.fail("drift", std::to_string(d), "intensities >= 0");
   }
@@ -207,6 +197,7 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   l.number("width", rl.width, 0.0, kInf, true);
   l.integer("max_restarts", rl.max_restarts, 1, 100);
   l.integer("max_samples", rl.max_samples, 1, 100000000);
+  l.number("defer", rl.defer, 0.0, 1000.0);
   if (!(rl.shrink * rl.width < 1.0)) {
     l.fail("width", std::to_string(rl.width),
            "shrink x width < 1 (each restart must narrow the working prior)");
@@ -344,14 +335,16 @@ TruthChange readChange(YamlMapReader e, const EstimatorConfig& c, double previou
            "a time after the previous change's " + std::to_string(previous_time) +
                " (times increasing)");
   }
-  const std::size_t n = c.uncertain.size();
+  const std::size_t n = c.uncertain.size(), loads = c.loadCount();
   if (e.has("xi") == e.has("values")) {
     e.fail("xi", e.has("xi") ? "given with values" : "(empty)", "either xi or values");
   }
-  ch.xi = previous_xi;
-  e.numberList("xi", ch.xi, n, n);
+  ch.xi = previous_xi;  // tolerances keep their truth
+  std::vector<double> xi(previous_xi.begin(), previous_xi.begin() + loads);
+  e.numberList("xi", xi, loads, loads);
+  std::copy(xi.begin(), xi.end(), ch.xi.begin());
   YamlMapReader v = e.map("values");
-  for (std::size_t i = 0; i < n; ++i) {
+  for (std::size_t i = 0; i < loads; ++i) {
     const UncertainParameter& u = c.uncertain[i];
     if (!v.has(u.name)) continue;
     double value = 0.0;
@@ -359,21 +352,31 @@ TruthChange readChange(YamlMapReader e, const EstimatorConfig& c, double previou
     ch.xi[i] = (value / u.nominal - 1.0) / u.relative_range;
   }
   v.finish();
-  checkGermPoint(e, e.has("xi") ? "xi" : "values", c, ch.xi, !e.has("xi"));
+  checkGermPoint(e, e.has("xi") ? "xi" : "values", c,
+                 std::vector<double>(ch.xi.begin(), ch.xi.begin() + loads), !e.has("xi"));
+  (void)n;
   e.finish();
   return ch;
 }
 
 void readTruth(YamlMapReader t, EstimatorConfig& c) {
-  const int n = static_cast<int>(c.uncertain.size());
-  c.truth.xi.assign(n, 0.0);
-  t.numberList("xi", c.truth.xi, n, n);
-  checkGermPoint(t, "xi", c, c.truth.xi);
+  const int n = static_cast<int>(c.uncertain.size()), loads = c.loadCount();
+  // truth.xi: one per `uncertain:` entry (the tolerances' truth is the truth
+  // vehicle's value), or one per estimated parameter.
+  c.truth.xi.assign(loads, 0.0);
+  t.numberList("xi", c.truth.xi, loads, n);
+  checkGermPoint(t, "xi", c, std::vector<double>(c.truth.xi.begin(), c.truth.xi.begin() + loads));
+  const bool xi_for_tolerances = static_cast<int>(c.truth.xi.size()) == n && n != loads;
+  if (n != loads && !xi_for_tolerances && static_cast<int>(c.truth.xi.size()) != loads) {
+    t.fail("xi", "a list of " + std::to_string(c.truth.xi.size()),
+           std::to_string(loads) + " or " + std::to_string(n) + " germ coordinates");
+  }
   t.unsignedInteger("seed", c.truth.seed);
 
   YamlMapReader v = t.map("vehicle");
   const bool override_vehicle = !v.empty();
-  for (const auto& u : c.uncertain) {
+  for (int i = 0; i < loads; ++i) {
+    const UncertainParameter& u = c.uncertain[i];
     if (v.has(u.name)) {
       throw ConfigError(c.source + ": key '" + v.keyPath(u.name) + "': " + u.name +
                         " is uncertain; its truth comes from truth.xi (and truth.schedule), "
@@ -383,6 +386,18 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
   if (override_vehicle) {
     c.truth.model = c.model_type->read(v, *c.model);
     v.finish();
+  }
+  // A tolerance's truth: the truth vehicle's value, as a germ coordinate that
+  // may lie outside the tolerance (a vehicle the tolerance does not cover).
+  if (!xi_for_tolerances) {
+    const std::shared_ptr<const ModelParameters> truth = c.truthModelParameters();
+    const Eigen::VectorXd& truth_values = truth->values;
+    const auto& names = c.model_type->parameterNames();
+    for (int i = loads; i < n; ++i) {
+      const UncertainParameter& u = c.uncertain[i];
+      const auto at = std::find(names.begin(), names.end(), u.name) - names.begin();
+      c.truth.xi.push_back((truth_values[at] / u.nominal - 1.0) / u.relative_range);
+    }
   }
 
   const std::size_t kChannels = c.model_type->channelNames().size();
@@ -457,10 +472,11 @@ Eigen::VectorXd EstimatorConfig::parameterValues(const Eigen::VectorXd& xi) cons
   return v;
 }
 
-EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_name,
+EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_name,
                             const ModelRegistry& models) {
   EstimatorConfig c;
   c.source = source_name;
+  const YAML::Node node = mergeVehicleFile(given, source_name, &c.vehicle_file);
   YamlMapReader root(node, "", source_name);
   YamlMapReader model = root.map("model");
   std::string type = c.model_type->name();
@@ -482,6 +498,15 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
     v.finish();
   }
   c.uncertain = readUncertain(root, *c.model_type, *c.model);
+  const std::vector<UncertainParameter> tolerances =
+      readTolerances(root, *c.model_type, *c.model, c.uncertain);
+  c.uncertain.insert(c.uncertain.end(), tolerances.begin(), tolerances.end());
+  c.tolerance_count = static_cast<int>(tolerances.size());
+  if (c.uncertain.empty()) {
+    root.fail("tolerances", "(no positive tolerance)",
+              "at least one uncertain parameter or a positive tolerance");
+  }
+  root.number("tolerances_prune", c.tolerances_prune, 0.0, 1.0);
   const int n = static_cast<int>(c.uncertain.size());
 
   YamlMapReader pc = root.map("pc");
@@ -532,6 +557,16 @@ EstimatorConfig parseConfig(const YAML::Node& node, const std::string& source_na
   const double q = c.collocation.sequence == PointSequence::kGauss
                        ? std::pow(c.collocation.points, n)
                        : c.collocation.points;
+  constexpr double kMaxTensorNodes = 20000;  // ~ a second of model runs per sample
+  if (c.collocation.sequence == PointSequence::kGauss && q > kMaxTensorNodes) {
+    col.fail("sequence", "gauss",
+             "halton or smolyak for " + std::to_string(n) + " uncertain parameters: the tensor " +
+                 "Gauss rule has points^n = " + std::to_string(c.collocation.points) + "^" +
+                 std::to_string(n) + " = " + roundTripText(q) +
+                 " nodes (more than " + std::to_string(static_cast<int>(kMaxTensorNodes)) +
+                 "), a model run each per sample; Halton needs about twice the basis terms (" +
+                 std::to_string(terms) + ")");
+  }
   if (c.collocation.sequence != PointSequence::kSmolyak && q < terms) {
     col.fail("points", std::to_string(c.collocation.points),
              "at least S = " + std::to_string(terms) + " collocation points (basis terms for " +
@@ -617,7 +652,15 @@ EstimatorConfig loadConfigFile(const std::string& path, const ModelRegistry& mod
   if (!in) throw ConfigError(path + ": cannot open the configuration file");
   std::stringstream text;
   text << in.rdbuf();
-  return parseConfigString(text.str(), path, models);
+  YAML::Node node;
+  try {
+    node = YAML::Load(text.str());
+  } catch (const YAML::Exception& e) {
+    throw ConfigError(path + ": line " + std::to_string(e.mark.line + 1) +
+                      ": not valid YAML (" + e.msg + ")");
+  }
+  anchorVehicleFile(node, path);
+  return parseConfig(node, path, models);
 }
 
 }  // namespace pc_ekf

@@ -175,7 +175,14 @@ struct EstimatorConfig {
   std::shared_ptr<const ModelParameters> modelParameters() const;
   // The truth's (truth.vehicle applied).
   std::shared_ptr<const ModelParameters> truthModelParameters() const;
+  // What is estimated: first the `uncertain:` entries (the load), then the
+  // last `tolerance_count` entries from `tolerances:` (nuisance parameters:
+  // vehicle values known to a tolerance, in the model's parameter order).
   std::vector<UncertainParameter> uncertain;
+  int tolerance_count = 0;
+  int loadCount() const { return static_cast<int>(uncertain.size()) - tolerance_count; }
+  std::string vehicle_file;       // the merged vehicle_file ("" without one)
+  double tolerances_prune = 0.0;  // fix tolerances with every total Sobol index below this
   int pc_order = 4;
   BasisTruncation pc_truncation;  // pc.truncation, pc.q_norm
   CollocationConfig collocation;

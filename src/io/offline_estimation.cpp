@@ -1,6 +1,7 @@
 #include "pc_ekf/io/offline_estimation.h"
 
 #include <chrono>
+#include <future>
 #include <stdexcept>
 
 #include "pc_ekf/filter/batch_update.h"
@@ -8,6 +9,7 @@
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/pc/pdf_sampler.h"
 
 namespace pc_ekf {
 
@@ -43,15 +45,19 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
   }
 }
 
-std::vector<Histogram> pcPdfs(const EstimatorConfig& c, const PolynomialBasis& basis,
-                              const Eigen::MatrixXd& coeffs) {
-  std::vector<Histogram> pdfs;
-  if (!coeffs.allFinite()) return pdfs;
-  for (Eigen::Index i = 0; i < coeffs.rows(); ++i) {
-    pdfs.push_back(pcHistogram(basis, coeffs.row(i).transpose(), c.pdf.draws, c.pdf.bins,
-                               c.pdf.seed + static_cast<std::uint64_t>(i)));
-  }
-  return pdfs;
+// The final PDFs: one set of pdf.seed germ draws for every parameter. The
+// draws do not depend on the data, so the sampler is built on a second
+// thread while the filter runs (same numbers whatever the timing).
+using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
+PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, const PolynomialBasis& basis) {
+  return std::async(std::launch::async, [&c, &basis] {
+    return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+  });
+}
+std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {
+  const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
+  if (!coeffs.allFinite()) return {};
+  return s->histograms(coeffs);
 }
 
 Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
@@ -74,6 +80,7 @@ Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
 
 void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
                 std::shared_ptr<const PcPropagator> prop, OfflineResult* r) {
+  const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
   const OneStepSettings settings = makeOneStepSettings(c);
   OneStepFilter filter(prop, settings);
   StepResult last;
@@ -97,7 +104,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   r->loo_channels = c.model_type->channelNames();
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);
-  r->pdfs = pcPdfs(c, prop->basis(), last.coefficients);
+  r->pdfs = pcPdfs(pdf_sampler, last.coefficients);
   r->integrations = prop->integrations();
   for (const auto& w : last.health.warnings()) r->warnings.push_back(w);
   if (r->rejected_samples) {
@@ -152,23 +159,19 @@ void checkPrediction(const EstimatorConfig& c, const MeasurementSeries& series,
 void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
               std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
               OfflineResult* r) {
-  const BatchResult b =
-      batchUpdate(*prop, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
+  const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
+  const BatchOutcome o = runBatchEstimate(c, *prop, series, alphas);
+  const BatchResult& b = o.result;
   SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
                    b.coefficients, b.nis, false, true, b.finite && b.forecast.ok, {}};
   r->records.push_back(rec);
   summarise(c, b.mean, b.stddev, r);
-  r->pdfs = pcPdfs(c, prop->basis(), b.coefficients);
+  r->pdfs = pcPdfs(pdf_sampler, b.coefficients);
   r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
-  r->healthy = b.finite && b.forecast.ok;
-  if (!b.forecast.first_problem.empty()) r->warnings.push_back(b.forecast.first_problem);
-  if (b.damping < 1.0) {
-    r->damped_updates = 1;
-    r->healthy = false;
-    r->warnings.push_back("update damped to keep the parameter means in their prior support "
-                          "(model error, or a parameter that should be declared uncertain)");
-  }
-  checkPrediction(c, series, prop->model(), prop->mapping(), b.mean, r);
+  r->damped_updates = b.damping < 1.0;
+  r->predictive = o.predictive;
+  r->healthy = o.healthy;
+  r->warnings.insert(r->warnings.end(), o.warnings.begin(), o.warnings.end());
 }
 
 void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
@@ -219,6 +222,33 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
 }
 
 }  // namespace
+
+BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
+                              const MeasurementSeries& series, const std::vector<double>& alphas) {
+  BatchOutcome o;
+  o.result =
+      batchUpdate(propagator, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
+  const BatchResult& b = o.result;
+  o.healthy = b.finite && b.forecast.ok;
+  if (!b.forecast.first_problem.empty()) o.warnings.push_back(b.forecast.first_problem);
+  if (b.damping < 1.0) {
+    o.healthy = false;
+    o.warnings.push_back(
+        "update damped to keep the parameter means in their prior support "
+        "(model error, or a parameter that should be declared uncertain)");
+  }
+  if (c.health.predictive_check && !series.empty() && b.mean.allFinite()) {
+    const ParameterMapping& map = propagator.mapping();
+    o.predictive = posteriorPredictiveCheck(propagator.model(), map.fullParameters(b.mean), series,
+                                            makeNoiseModel(c), c.integration, map.count(),
+                                            c.health.nis_confidence);
+    if (o.predictive.outside) {
+      o.healthy = false;
+      o.warnings.push_back(o.predictive.warning(propagator.model().channelNames(), series));
+    }
+  }
+  return o;
+}
 
 OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,
                                    std::shared_ptr<const MechanicalModel> model,

@@ -9,8 +9,11 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/pc_propagator.h"
 #include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/filter/prior_sensitivity.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/pc/pc_statistics.h"
@@ -65,10 +68,28 @@ struct OfflineResult {
   double band_nested_fraction = 1.0;
   long integrations = 0;  // point- or member-intervals, or full simulations (grid)
   double wall_seconds = 0.0;
+  // estimate_offline --sensitivity (empty parameters: not computed), and the
+  // tolerances that tolerances_prune fixed ("name: why").
+  PriorSensitivity sensitivity;
+  std::vector<std::string> pruned_tolerances;
   // Grid posterior only.
   int modes = 0;
   double border_mass = 0.0;
 };
+
+// The batch update (whole_set: alphas {1}; es_mda) and its health policy,
+// one for estimate_offline and estimator_node's ~estimate_batch: healthy
+// when the result is finite and the forecast worked, no support damping was
+// needed and the posterior-predictive check (health.predictive_check) holds;
+// each failure adds its warning.
+struct BatchOutcome {
+  BatchResult result;
+  bool healthy = true;
+  std::vector<std::string> warnings;
+  PredictiveCheck predictive;
+};
+BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
+                              const MeasurementSeries& series, const std::vector<double>& alphas);
 
 using ProgressCallback = std::function<void(const std::string&)>;
 

@@ -74,6 +74,20 @@ std::string toJson(const OfflineResult& r) {
                            {"lower", r.predictive.lower},
                            {"upper", r.predictive.upper},
                            {"outside", r.predictive.outside}};
+  if (!r.sensitivity.parameters.empty()) {
+    Json rows = Json::array();
+    for (int i : r.sensitivity.ranking()) {
+      Json per_channel = Json::object();
+      for (std::size_t c = 0; c < r.sensitivity.channels.size(); ++c) {
+        per_channel[r.sensitivity.channels[c]] = r.sensitivity.total(i, static_cast<Eigen::Index>(c));
+      }
+      rows.push_back({{"name", r.sensitivity.parameters[i]},
+                      {"largest_total", r.sensitivity.largestTotal(i)},
+                      {"total", per_channel}});
+    }
+    j["sensitivity"] = rows;  // ranked, total Sobol indices of the prior forecast
+  }
+  if (!r.pruned_tolerances.empty()) j["pruned_tolerances"] = r.pruned_tolerances;
   j["rejected_samples"] = r.rejected_samples;
   j["damped_updates"] = r.damped_updates;
   j["reopened"] = r.reopened;

@@ -37,6 +37,8 @@ bool YamlMapReader::has(const std::string& key) const {
   return node_.IsMap() && node_[key].IsDefined() && !node_[key].IsNull();
 }
 
+bool YamlMapReader::isMap(const std::string& key) const { return has(key) && node_[key].IsMap(); }
+
 YamlMapReader YamlMapReader::map(const std::string& key) {
   read_.insert(key);
   if (!has(key)) return YamlMapReader(YAML::Node(), keyPath(key), source_);

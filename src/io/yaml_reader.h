@@ -19,6 +19,7 @@ class YamlMapReader {
   YamlMapReader(const YAML::Node& node, std::string path, std::string source);
 
   bool has(const std::string& key) const;
+  bool isMap(const std::string& key) const;  // present and a map
   bool empty() const { return !node_.IsMap() || node_.size() == 0; }
   YamlMapReader map(const std::string& key);  // absent -> empty map
   YAML::Node sequence(const std::string& key);  // absent -> null node

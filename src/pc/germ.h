@@ -31,4 +31,9 @@ GermFamily germFamilyFromString(const std::string& name);
 // Human-readable, e.g. "beta(2,2)".
 std::string describe(const GermSpec& germ);
 
+// Mean and standard deviation of the germ under its own measure (e.g. 0 and
+// 1/sqrt(5) for Beta(2, 2) on [-1, 1]).
+double germMean(const GermSpec& germ);
+double germStddev(const GermSpec& germ);
+
 }  // namespace pc_ekf

@@ -1,8 +1,11 @@
-// Per-sample parameter PDFs for estimator_node: the histograms of
-// pcHistogram (same germ draws, same binning, so the same numbers) with the
-// basis evaluated at the draws once, not at every sample (100 000 draws cost
-// about 140 ms per parameter to evaluate, the product with new coefficients
-// about 1 ms).
+// Parameter PDFs: the histograms of pcHistogram (same germ draws, same
+// binning, same arithmetic, so the same numbers) for every parameter at once,
+// at a cost that does not grow with the draws times the terms per parameter.
+// One seeded set of germ draws serves every parameter. The draws and their
+// univariate polynomial values are computed once, at construction; a call
+// then forms the basis in cache-sized blocks of draws (a term of total
+// degree p is a product of at most p of those values) and accumulates every
+// parameter's expansion from that one block (docs/realtime.md).
 #pragma once
 
 #include <Eigen/Dense>
@@ -16,15 +19,23 @@ namespace pc_ekf {
 
 class ParameterPdfSampler {
  public:
-  // Draws for parameter i use seed + i, as estimate_offline's final PDFs do.
-  ParameterPdfSampler(const PolynomialBasis& basis, int parameters, int draws, int bins,
-                      std::uint64_t seed);
-  // Histogram of parameter i's expansion (coefficients: the S terms).
-  Histogram histogram(int parameter, const Eigen::VectorXd& coefficients) const;
+  // The draws are sampleGerms(basis, draws, seed): pcHistogram(basis, c,
+  // draws, bins, seed) of each parameter gives histograms()'s numbers.
+  ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins, std::uint64_t seed);
+  // Histogram of each row of `coefficients` (quantities x S terms), binned
+  // over its sample range; none when a coefficient is not finite.
+  std::vector<Histogram> histograms(const Eigen::MatrixXd& coefficients) const;
+  int draws() const { return draws_; }
+  int bins() const { return bins_; }
 
  private:
-  std::vector<Eigen::MatrixXd> basis_at_draws_;  // per parameter: draws x S
+  int terms_;
+  int draws_;
   int bins_;
+  // Row (d * order + k - 1): psi_k of germ d at every draw (psi_0 = 1 is exact
+  // and left out of the products, which does not change their bits).
+  std::vector<double> univariate_;
+  std::vector<std::vector<int>> factors_;  // per term: rows of univariate_, ascending d
 };
 
 }  // namespace pc_ekf

@@ -91,6 +91,15 @@ void EstimatorDiagnostics::reportInput(diagnostic_updater::DiagnosticStatusWrapp
   if (new_expired) m << "; road data late, held at its last value";
   s.summary(new_rejections || new_expired ? DiagnosticStatus::WARN : DiagnosticStatus::OK, m.str());
   s.add("input rate (samples/s)", rate);
+  const NodeBacklog& b = backlog_;
+  s.add("lag (ms, newest received - newest processed stamp)", 1e3 * b.lag);
+  s.add("max lag (ms)", 1e3 * b.max_lag);
+  s.add("queue depth (received, not processed)", b.queue_depth);
+  s.add("max queue depth", b.max_queue_depth);
+  s.add("queue overflow (dropped)", b.queue_overflow);
+  s.add("parameter_pdf being drawn", b.pdf_queue);
+  s.add("deferred re-run swap after sample", b.rerun_pending_swap);
+  s.add("deferred re-runs waited for", b.late_swaps);
   s.add("samples received", c.samples_received);
   s.add("samples processed", c.samples_processed);
   s.add("samples rejected", sum(c.samples_rejected));

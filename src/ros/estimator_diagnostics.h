@@ -31,7 +31,7 @@ struct EstimatorCounters {
   // non_finite, ignored = analytic road in use).
   std::map<std::string, std::uint64_t> road_rejected;
   std::uint64_t road_wait_expired = 0;   // processed with the road held at its last value
-  std::uint64_t non_finite_updates = 0;  // filter state restored (see README)
+  std::uint64_t non_finite_updates = 0;  // filter state restored (docs/nodes.md)
   std::uint64_t batch_not_kept = 0;      // beyond node.max_batch_samples
   std::uint64_t resets = 0;              // ~reset calls
   std::uint64_t time_jump_resets = 0;    // node.reset_on_time_jump
@@ -66,6 +66,20 @@ struct NodeUpkeep {
   std::string master_last_report;  // what it registered
 };
 
+// How far processing is behind the input (docs/realtime.md): joint_states
+// are taken off the subscription by a receiver thread into the node's own
+// queue, so that received and processed can be told apart.
+struct NodeBacklog {
+  double lag = 0.0;             // s, newest stamp received minus newest stamp processed
+  double max_lag = 0.0;         // s, largest lag seen when a sample was processed
+  std::size_t queue_depth = 0;  // received, not yet processed
+  std::size_t max_queue_depth = 0;
+  std::uint64_t queue_overflow = 0;  // dropped: more than node.queue_size waiting
+  std::size_t pdf_queue = 0;         // parameter_pdf messages being drawn
+  int rerun_pending_swap = 0;        // deferred re-run: swap after this sample, 0 = none
+  int late_swaps = 0;                // deferred re-runs the filter had to wait for
+};
+
 class EstimatorDiagnostics {
  public:
   EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle pnh, const std::string& node_name,
@@ -74,6 +88,7 @@ class EstimatorDiagnostics {
   EstimatorCounters& counters() { return counters_; }
   LastUpdate& last() { return last_; }
   NodeUpkeep& upkeep() { return upkeep_; }
+  NodeBacklog& backlog() { return backlog_; }
   // Run state shown with the input: origin, road mode, pending samples.
   // `origin`: the stamp of t = 0 as sec.nsec, "" while not set.
   void setRunState(const std::string& road_mode, const std::string& origin, std::size_t pending,
@@ -92,6 +107,7 @@ class EstimatorDiagnostics {
   EstimatorCounters counters_;
   LastUpdate last_;
   NodeUpkeep upkeep_;
+  NodeBacklog backlog_;
   std::uint64_t reported_checkpoint_errors_ = 0;
   // For rates and "new rejections since the last report".
   std::uint64_t reported_received_ = 0, reported_rejected_ = 0, reported_expired_ = 0;

@@ -18,7 +18,7 @@ void requestStop(int) { g_stop = 1; }
 
 int main(int argc, char** argv) {
   // Own SIGINT/SIGTERM handling: the estimator (and its shutdown checkpoint,
-  // README "Checkpoints") is destroyed before ros::shutdown, while logging works.
+  // docs/reliability.md "Checkpoints") is destroyed before ros::shutdown, while logging works.
   ros::init(argc, argv, "estimator_node", ros::init_options::NoSigintHandler);
   std::signal(SIGINT, requestStop);
   std::signal(SIGTERM, requestStop);

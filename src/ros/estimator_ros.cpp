@@ -1,9 +1,11 @@
 #include "pc_ekf/ros/estimator_ros.h"
 
 #include <algorithm>
+#include <boost/make_shared.hpp>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
 #include <stdexcept>
 
 #include "pc_ekf/io/estimation_setup.h"
@@ -78,9 +80,8 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
     prior_propagator_ = analytic_propagator_;
   }
   if (config_.node.publish_pdf) {
-    pdfs_ = std::make_shared<ParameterPdfSampler>(
-        prior_propagator_->basis(), prior_propagator_->parameterCount(), config_.pdf.draws,
-        config_.pdf.bins, config_.pdf.seed);
+    pdfs_ = std::make_shared<ParameterPdfSampler>(prior_propagator_->basis(), config_.pdf.draws,
+                                                  config_.pdf.bins, config_.pdf.seed);
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
   // Before any subscription: no callback may see the prior state.
@@ -94,8 +95,21 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   batch_pub_ = nh_.advertise<ParameterEstimate>("parameter_estimate/batch", 10);
   if (config_.node.publish_pdf) pdf_pub_ = nh_.advertise<ParameterPdf>("parameter_pdf", queue);
   const auto hints = ros::TransportHints().tcpNoDelay();
-  joint_state_sub_ =
-      nh_.subscribe("suspension/joint_states", queue, &EstimatorRos::onJointState, this, hints);
+  if (pdfs_) {
+    pdf_worker_ = std::make_unique<PdfWorker>(
+        pdfs_, prior_propagator_->mapping().names(),
+        [pub = pdf_pub_](const ParameterPdf& msg) mutable { pub.publish(msg); });
+  }
+  // joint_states on the receiver thread's own queue (onJointStateReceived).
+  ros::SubscribeOptions joint_options;
+  joint_options.init<sensor_msgs::JointState>(
+      nh_.resolveName("suspension/joint_states"), queue,
+      [this](const sensor_msgs::JointState::ConstPtr& msg) { onJointStateReceived(msg); });
+  joint_options.transport_hints = hints;
+  joint_options.callback_queue = &receive_queue_;
+  joint_state_sub_ = nh_.subscribe(joint_options);
+  receiver_ = std::make_unique<ros::AsyncSpinner>(1, &receive_queue_);
+  receiver_->start();
   if (config_.model_type->twoContacts()) {
     road_sub_ = nh_.subscribe("road/profile", queue, &EstimatorRos::onRoad, this, hints);
   }
@@ -125,6 +139,11 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
 }
 
 EstimatorRos::~EstimatorRos() {
+  // No more joint_states handed to this object, none of its callbacks left queued.
+  receiver_->stop();
+  joint_state_sub_.shutdown();
+  nh_.getCallbackQueue()->removeByID(reinterpret_cast<std::uint64_t>(this));
+  pdf_worker_.reset();
   if (!checkpoint_writer_) return;
   if (run_) saveCheckpoint();
   checkpoint_writer_->flush();
@@ -146,6 +165,12 @@ void EstimatorRos::startRun() {
     std::remove(checkpoint_file_.c_str());
   }
   updateRunState();
+}
+
+std::unique_ptr<EstimatorRun> EstimatorRos::makeRun() const {
+  const bool topic = timeline_.mode() == RoadMode::kTopic;
+  return std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_ != nullptr,
+                                        topic ? timeline_.road() : nullptr);
 }
 
 std::shared_ptr<const PcPropagator> EstimatorRos::runPropagator() const {
@@ -176,7 +201,7 @@ void EstimatorRos::resumeFromCheckpoint() {
   } catch (const std::invalid_argument& e) {
     throw CheckpointError("checkpoint " + checkpoint_file_ + ": key 'road.samples': " + e.what());
   }
-  run_ = std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_);
+  run_ = makeRun();
   run_->resumeFrom(c, checkpoint_file_);
   diagnostics_.counters() = countersFromMap(c.counters, checkpoint_file_);
   timeline_.keepRoadFrom(run_->oldestTime());
@@ -221,6 +246,49 @@ void EstimatorRos::rejectSample(const std::string& reason, const std::string& de
   ++diagnostics_.counters().samples_rejected[reason];
   ROS_WARN_THROTTLE(kWarnPeriod, "%s: joint_states rejected (%s): %s", name_.c_str(),
                     reason.c_str(), detail.c_str());
+}
+
+namespace {
+
+// One processNext() on the node's callback queue.
+class ProcessNextCallback : public ros::CallbackInterface {
+ public:
+  explicit ProcessNextCallback(std::function<void()> f) : f_(std::move(f)) {}
+  CallResult call() override {
+    f_();
+    return Success;
+  }
+
+ private:
+  std::function<void()> f_;
+};
+
+}  // namespace
+
+void EstimatorRos::onJointStateReceived(const sensor_msgs::JointState::ConstPtr& msg) {
+  {
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    if (inbox_.size() >= static_cast<std::size_t>(config_.node.queue_size)) {
+      inbox_.pop_front();  // as a full subscriber queue does: the oldest goes
+      ++diagnostics_.backlog().queue_overflow;
+    }
+    inbox_.push_back(msg);
+    newest_received_ = std::max(newest_received_, msg->header.stamp);
+  }
+  nh_.getCallbackQueue()->addCallback(
+      boost::make_shared<ProcessNextCallback>([this] { processNext(); }),
+      reinterpret_cast<std::uint64_t>(this));
+}
+
+void EstimatorRos::processNext() {
+  sensor_msgs::JointState::ConstPtr msg;
+  {
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    if (inbox_.empty()) return;  // dropped by an overflow
+    msg = inbox_.front();
+    inbox_.pop_front();
+  }
+  onJointState(msg);
 }
 
 void EstimatorRos::onJointState(const sensor_msgs::JointState::ConstPtr& msg) {
@@ -310,6 +378,17 @@ void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
 
 void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
   updateRunState();
+  {
+    NodeBacklog& b = diagnostics_.backlog();
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    b.queue_depth = inbox_.size();
+    b.lag = last_processed_stamp_.isZero()
+                ? 0.0
+                : std::max(0.0, (newest_received_ - last_processed_stamp_).toSec());
+    b.pdf_queue = pdf_worker_ ? pdf_worker_->queued() : 0;
+    b.rerun_pending_swap = run_ ? run_->pendingSwap() : 0;
+    b.late_swaps = run_ ? run_->lateSwaps() : 0;
+  }
   reportCheckpointWrites();
   const MasterStatus master = master_watch_->status();
   NodeUpkeep& upkeep = diagnostics_.upkeep();
@@ -348,7 +427,7 @@ void EstimatorRos::processReleased() {
 
 void EstimatorRos::process(const ReleasedSample& sample) {
   EstimatorCounters& counters = diagnostics_.counters();
-  if (!run_) run_ = std::make_unique<EstimatorRun>(config_, runPropagator(), pdfs_);
+  if (!run_) run_ = makeRun();
   if (sample.road_held) {
     ++counters.road_wait_expired;
     ROS_WARN_THROTTLE(kWarnPeriod,
@@ -366,13 +445,21 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   }
   const double done = steadySeconds();
   estimate_pub_.publish(e.estimate);
-  if (e.pdf) pdf_pub_.publish(*e.pdf);
+  if (e.pdf && pdf_worker_) pdf_worker_->submit(std::move(*e.pdf));
   timeline_.keepRoadFrom(run_->oldestTime());
 
   ++counters.samples_processed;
   counters.non_finite_updates += e.non_finite + e.coherence_non_finite;
   counters.batch_not_kept += e.batch_full;
   last_processed_stamp_ = sample.stamp;
+  {
+    NodeBacklog& b = diagnostics_.backlog();
+    std::lock_guard<std::mutex> lock(inbox_mutex_);
+    b.queue_depth = inbox_.size();
+    b.max_queue_depth = std::max(b.max_queue_depth, b.queue_depth);
+    b.lag = std::max(0.0, (newest_received_ - sample.stamp).toSec());
+    b.max_lag = std::max(b.max_lag, b.lag);
+  }
   if (checkpoint_writer_ && run_->samples() % checkpoint_every_ == 0) {
     // A failed write is logged (reportCheckpointWrites); estimating goes on.
     reportCheckpointWrites();
@@ -400,7 +487,7 @@ bool EstimatorRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Respo
   startRun();
   ++diagnostics_.counters().resets;
   diagnostics_.last() = LastUpdate{};
-  const EstimatorRun prior(config_, prior_propagator_, nullptr);
+  const EstimatorRun prior(config_, prior_propagator_, false);
   const ParameterEstimate msg = prior.priorEstimate(ros::Time::now());
   estimate_pub_.publish(msg);
   std::string text = "reset after " + std::to_string(samples) + " samples; prior";

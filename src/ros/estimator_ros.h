@@ -3,17 +3,24 @@
 // (EstimatorTimeline), runs the filters (EstimatorRun), publishes and reports.
 // All names are relative (several vehicles side by side in namespaces).
 // Callbacks, timers and services must run on one thread (ros::spin, or the
-// nodelet's single-threaded queue): nothing here is locked.
+// nodelet's single-threaded queue): nothing there is locked. Two threads of
+// the node's own hand work to it (docs/realtime.md): a receiver takes
+// joint_states off the subscription into inbox_ (so that the lag and queue
+// depth are known), and the PDF worker draws parameter_pdf messages; the
+// filters' deferred re-runs have threads of their own (OneStepFilter).
 #pragma once
 
 #include <pc_ekf/RoadHeights.h>
 #include <pc_ekf/RoadProfile.h>
+#include <ros/callback_queue.h>
 #include <ros/ros.h>
 #include <sensor_msgs/JointState.h>
 #include <std_srvs/Trigger.h>
 
 #include <cstdint>
+#include <deque>
 #include <memory>
+#include <mutex>
 #include <string>
 
 #include "pc_ekf/filter/pc_propagator.h"
@@ -39,6 +46,10 @@ class EstimatorRos {
   ~EstimatorRos();
 
  private:
+  // Receiver thread: queues the message and schedules processNext().
+  void onJointStateReceived(const sensor_msgs::JointState::ConstPtr& msg);
+  // Main thread: the oldest queued joint_states message.
+  void processNext();
   void onJointState(const sensor_msgs::JointState::ConstPtr& msg);
   void onRoad(const RoadProfile::ConstPtr& msg);
   void onRoadHeights(const RoadHeights::ConstPtr& msg);
@@ -56,6 +67,7 @@ class EstimatorRos {
   void updateRunState();
   // The filters' propagator for the current road mode (topic: the timeline's road).
   std::shared_ptr<const PcPropagator> runPropagator() const;
+  std::unique_ptr<EstimatorRun> makeRun() const;
   void resumeFromCheckpoint();
   // Hands the run's state to the writer thread (latest wins).
   void saveCheckpoint();
@@ -72,6 +84,7 @@ class EstimatorRos {
   std::shared_ptr<const ParameterPdfSampler> pdfs_;          // null: no parameter_pdf
   EstimatorTimeline timeline_;
   std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
+  std::unique_ptr<PdfWorker> pdf_worker_;  // null: no parameter_pdf
   EstimatorDiagnostics diagnostics_;
   std::string checkpoint_file_;  // "" = no checkpoints
   int checkpoint_every_ = 100;   // samples of the run between writes
@@ -79,6 +92,13 @@ class EstimatorRos {
   // takes ~150 ms, far more than the sampling interval.
   std::unique_ptr<BackgroundWriter> checkpoint_writer_;
   ros::Time last_processed_stamp_;
+
+  // joint_states received, not yet processed (receiver thread -> main thread).
+  std::mutex inbox_mutex_;
+  std::deque<sensor_msgs::JointState::ConstPtr> inbox_;
+  ros::Time newest_received_;  // guarded by inbox_mutex_
+  ros::CallbackQueue receive_queue_;
+  std::unique_ptr<ros::AsyncSpinner> receiver_;
 
   ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_;
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;

@@ -6,6 +6,7 @@
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/predictive_check.h"
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/pc/pc_statistics.h"
 #include "pc_ekf/ros/message_conversion.h"
 
@@ -45,13 +46,22 @@ void zeroNonFinite(ParameterEstimate& msg) {
 }
 
 EstimatorRun::EstimatorRun(const EstimatorConfig& config,
-                           std::shared_ptr<const PcPropagator> propagator,
-                           std::shared_ptr<const ParameterPdfSampler> pdfs)
+                           std::shared_ptr<const PcPropagator> propagator, bool pdfs,
+                           std::shared_ptr<const SampledRoad> topic_road)
     : config_(config),
       propagator_(propagator),
-      pdfs_(std::move(pdfs)),
+      pdfs_(pdfs),
       full_(propagator, makeOneStepSettings(config)),
-      decimated_(propagator, makeOneStepSettings(config)) {}
+      decimated_(propagator, makeOneStepSettings(config)) {
+  if (topic_road && config.safeguards.relinearize.defer > 0.0) {
+    rerun_road_ = std::make_shared<RoadSnapshots>(std::move(topic_road));
+    const auto update = [road = rerun_road_] { road->update(); };
+    // One copy serves both filters' re-runs (each reads it, neither changes it).
+    full_.setRerun(makePropagator(config, makeModel(config, rerun_road_))->withThreads(1), update);
+    decimated_.setRerun(makePropagator(config, makeModel(config, rerun_road_))->withThreads(1),
+                        update);
+  }
+}
 
 double EstimatorRun::oldestTime() const {
   // A filter that may still re-linearise needs the road from its start.
@@ -72,6 +82,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   const Eigen::MatrixXd before = full_.state();
   const double time_before = full_.time();
   StepResult r = full_.process(m);
+  pending_swap_ = r.rerun_pending ? r.rerun_swap_after : 0;
   const bool singular = r.update.singular;
   if (!finiteResult(r)) {
     // Keep the filter usable: the sample is skipped, its index still counted.
@@ -116,12 +127,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   }
 
   if (pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite()) {
-    std::vector<Histogram> histograms;
-    for (Eigen::Index i = 0; i < r.coefficients.rows(); ++i) {
-      histograms.push_back(
-          pdfs_->histogram(static_cast<int>(i), r.coefficients.row(i).transpose()));
-    }
-    out.pdf = pdfMessage(propagator_->mapping().names(), histograms, {}, r.index, stamp);
+    out.pdf = PdfRequest{r.coefficients, static_cast<std::uint32_t>(r.index), stamp};
   }
   return out;
 }
@@ -195,8 +201,10 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
                                          ? config_.es_mda.alphas
                                          : std::vector<double>{1.0};
   const MeasurementSeries series = batch_series_.series();
-  const BatchResult b = batchUpdate(*propagator_, series, makeNoiseModel(config_),
-                                    config_.update, alphas, config_.safeguards.support);
+  // estimate_offline's policy (runBatchEstimate); the node adds only what it
+  // publishes: nothing for a non-finite result or a failed forecast.
+  const BatchOutcome o = runBatchEstimate(config_, *propagator_, series, alphas);
+  const BatchResult& b = o.result;
   const bool finite =
       b.finite && b.mean.allFinite() && b.stddev.allFinite() && b.coefficients.allFinite();
   std::ostringstream s;
@@ -221,23 +229,15 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   msg.nis = b.nis;
   msg.nis_channels = static_cast<std::uint32_t>(b.observations);
   msg.band_nested = true;
-  msg.healthy = true;
   msg.damping = b.damping;
-  if (!b.forecast.first_problem.empty()) msg.warnings.push_back(b.forecast.first_problem);
-  if (b.damping < 1.0) {
-    msg.healthy = false;
-    msg.warnings.push_back("update damped to keep the parameter means in their prior support");
-  }
-  if (config_.health.predictive_check) {
-    const ParameterMapping& map = propagator_->mapping();
-    const PredictiveCheck p = posteriorPredictiveCheck(
-        propagator_->model(), map.fullParameters(b.mean), series, makeNoiseModel(config_),
-        config_.integration, map.count(), config_.health.nis_confidence);
-    setPredictiveCheck(msg, p, p.warning(propagator_->model().channelNames(), series));
-    if (p.available) {
-      s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper
-        << "]" << (p.outside ? " FAILED" : "");
-    }
+  const PredictiveCheck& p = o.predictive;
+  setPredictiveCheck(msg, p, "");  // its warning is among o.warnings
+  if (p.outside) msg.warnings.pop_back();
+  msg.healthy = o.healthy;
+  msg.warnings.insert(msg.warnings.end(), o.warnings.begin(), o.warnings.end());
+  if (p.available) {
+    s << "; predictive check " << p.statistic << " in [" << p.lower << ", " << p.upper << "]"
+      << (p.outside ? " FAILED" : "");
   }
   s << (msg.healthy ? "; healthy" : "; NOT healthy");
   s.precision(9);

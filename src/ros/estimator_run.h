@@ -17,12 +17,15 @@
 #include "pc_ekf/io/checkpoint.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/pdf_sampler.h"
+#include "pc_ekf/ros/estimator_run_pdfs.h"
+#include "pc_ekf/ros/estimator_run_road.h"
 
 namespace pc_ekf {
 
 struct SampleEstimate {
   ParameterEstimate estimate;
-  std::optional<ParameterPdf> pdf;
+  // parameter_pdf due (node.pdf_every): its coefficients, for PdfWorker.
+  std::optional<PdfRequest> pdf;
   // The update produced NaN/Inf: the filter went back to its state before the
   // sample and the message carries that state with non_finite = true.
   bool non_finite = false;
@@ -39,9 +42,11 @@ struct BatchEstimate {
 
 class EstimatorRun {
  public:
-  // `pdfs` null: no parameter_pdf messages.
+  // `pdfs` false: no parameter_pdf messages. `topic_road`: the road of
+  // `propagator`'s model when it grows from road messages (a deferred re-run
+  // then reads copies of it, RoadSnapshots).
   EstimatorRun(const EstimatorConfig& config, std::shared_ptr<const PcPropagator> propagator,
-               std::shared_ptr<const ParameterPdfSampler> pdfs);
+               bool pdfs, std::shared_ptr<const SampledRoad> topic_road = nullptr);
 
   // Forecast to m.time and update; m.time must not be before time().
   SampleEstimate process(const Measurement& m, const ros::Time& stamp);
@@ -57,6 +62,9 @@ class EstimatorRun {
   // by the one-step filters).
   double oldestTime() const;
   std::size_t batchSamples() const { return batch_series_.size(); }
+  // Deferred re-run of the full filter: swap after this sample (0 = none).
+  int pendingSwap() const { return pending_swap_; }
+  int lateSwaps() const { return full_.lateSwaps(); }
 
   // The run's state into a checkpoint: both filters, the last coherence
   // comparison and the kept batch samples (the node adds origin and counters).
@@ -72,12 +80,14 @@ class EstimatorRun {
 
   EstimatorConfig config_;
   std::shared_ptr<const PcPropagator> propagator_;
-  std::shared_ptr<const ParameterPdfSampler> pdfs_;
+  bool pdfs_;
+  std::shared_ptr<RoadSnapshots> rerun_road_;  // topic road: the deferred re-runs' copies
   OneStepFilter full_;
   OneStepFilter decimated_;
   std::optional<Eigen::VectorXd> disagreement_;  // last multi-rate comparison
   KeptSamples batch_series_;
   ros::Time batch_last_stamp_;
+  int pending_swap_ = 0;
 };
 
 // Replaces every non-finite number of a message by 0 (documented in the

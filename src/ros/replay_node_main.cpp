@@ -1,6 +1,6 @@
 // replay_node: plays a bag's topics into the graph, in the node's namespace
 // (rosrun pc_ekf replay_node _bag:=FILE.bag). Parameters: src/ros/replay_options.h
-// and README "replay_node". Exit 0 when done, 2 on a bad bag or parameter.
+// and docs/nodes.md "replay_node". Exit 0 when done, 2 on a bad bag or parameter.
 #include <ros/ros.h>
 
 #include <memory>

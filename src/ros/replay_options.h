@@ -1,5 +1,5 @@
 // Parameters of replay_node (private namespace), loaded once and validated.
-// README "replay_node" documents each one.
+// docs/nodes.md "replay_node" documents each one.
 #pragma once
 
 #include <ros/node_handle.h>

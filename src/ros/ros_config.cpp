@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "pc_ekf/io/checkpoint.h"
+#include "pc_ekf/io/vehicle_file.h"
 #include "pc_ekf/ros/model_plugins.h"
 
 namespace pc_ekf {
@@ -104,13 +105,16 @@ EstimatorConfig loadRosConfig(const ros::NodeHandle& private_nh, std::uint64_t* 
     if (!root.IsMap()) return parseConfig(root, file, modelRegistryWithPlugins());  // reports the wrong root type
     source = file;
   }
+  anchorVehicleFile(root, file);  // relative to the config file (or the working directory)
   if (params.size() > 0) {
+    if (params["vehicle_file"]) anchorVehicleFile(params, "");
     mergeYaml(root, params);
     source = source.empty() ? "rosparam " + ns : source + " + rosparam " + ns;
   }
   if (source.empty()) source = "defaults (no ~config_file, no private parameters)";
   EstimatorConfig config = parseConfig(root, source, modelRegistryWithPlugins());
-  if (config_hash) *config_hash = fnv1a64(canonicalConfigText(root));
+  // The identity covers the vehicle file's contents, not only its name.
+  if (config_hash) *config_hash = fnv1a64(canonicalConfigText(mergeVehicleFile(root, source, nullptr)));
   return config;
 }
 

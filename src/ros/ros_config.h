@@ -17,7 +17,7 @@
 namespace pc_ekf {
 
 // Private parameters that are not schema keys: the file name itself,
-// diagnostic_updater's own period and the checkpoint settings (README
+// diagnostic_updater's own period and the checkpoint settings (docs/reliability.md
 // "Checkpoints"; node only, so the CLIs' schema is unaffected).
 constexpr const char* kConfigFileParam = "config_file";
 constexpr const char* kDiagnosticPeriodParam = "diagnostic_period";

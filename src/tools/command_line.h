@@ -21,12 +21,20 @@ class CommandLine {
       : program_(std::move(program)), usage_(std::move(usage)) {}
 
   // Returns -1 when parsed; otherwise the exit status (0 after --help, 2 on error).
-  int parse(int argc, char** argv, const std::vector<std::string>& known) {
+  // `flags` take no value (has() tells whether given).
+  int parse(int argc, char** argv, const std::vector<std::string>& known,
+            const std::vector<std::string>& flags = {}) {
     for (int i = 1; i < argc; ++i) {
       const std::string key = argv[i];
       if (key == "-h" || key == "--help") {
         std::cout << usage_;
         return 0;
+      }
+      bool flag = false;
+      for (const auto& f : flags) flag = flag || key == f;
+      if (flag) {
+        values_[key] = "";
+        continue;
       }
       bool ok = false;
       for (const auto& k : known) ok = ok || key == k;

@@ -10,13 +10,17 @@
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/tools/command_line.h"
+#include "pc_ekf/tools/record_input.h"
 
 namespace {
 
 const char* kUsage =
     "usage: estimate_offline --config FILE.yaml [--measurements FILE.csv | --bag FILE.bag]\n"
     "                        [--method one_step|whole_set|es_mda|enkf|grid]\n"
-    "                        [--update paper|square_root] [--seed N] [--out DIR]\n";
+    "                        [--update paper|square_root] [--seed N] [--out DIR]\n"
+    "                        [--sensitivity]\n"
+    "  --sensitivity: total Sobol indices of every uncertain parameter on each observed\n"
+    "  channel (prior forecast over the record), a ranked table on stderr and in the JSON\n";
 
 }  // namespace
 
@@ -24,7 +28,8 @@ int main(int argc, char** argv) {
   using namespace pc_ekf;
   CommandLine args("estimate_offline", kUsage);
   const int parsed = args.parse(
-      argc, argv, {"--config", "--measurements", "--bag", "--method", "--update", "--seed", "--out"});
+      argc, argv, {"--config", "--measurements", "--bag", "--method", "--update", "--seed", "--out"},
+      {"--sensitivity"});
   if (parsed >= 0) return parsed;
   if (!args.has("--config")) return args.badInput(std::string("--config is required\n") + kUsage);
   if (args.has("--measurements") && args.has("--bag")) {
@@ -38,29 +43,18 @@ int main(int argc, char** argv) {
     std::uint64_t seed = config.truth.seed;
     int status = 0;
     if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
-    // A bag supplies the road (replacing the config's) and the samples.
-    std::shared_ptr<const ContactRoad> bag_road;
-    MeasurementSeries series;
-    if (args.has("--bag")) {
-      BagRecord bag = readBag(args["--bag"], bagReadOptions(config));
-      for (std::size_t i = 0; i < bag.warnings.size() && i < 5; ++i) {
-        std::cerr << "[bag] " << args["--bag"] << ": " << bag.warnings[i] << "\n";
-      }
-      if (bag.warnings.size() > 5) {
-        std::cerr << "[bag] ... and " << bag.warnings.size() - 5 << " more warnings\n";
-      }
-      bag_road = std::make_shared<SampledRoad>(bag.road_contacts.t, bag.road_contacts.heights);
-      series = std::move(bag.samples);
-    }
-    const auto model = makeModel(config, makeRoad(config, bag_road));
-    if (args.has("--measurements")) {
-      series = readMeasurementCsvFile(args["--measurements"], config.model_type->channelNames());
-    }
-    if (!args.has("--measurements") && !args.has("--bag")) {
-      series = synthesizeFromConfig(config, *model, seed);
-    }
+    const RecordInput record =
+        loadRecord(config, args.has("--bag") ? args["--bag"] : "",
+                   args.has("--measurements") ? args["--measurements"] : "", seed);
+    const auto& model = record.model;
+    const MeasurementSeries& series = record.series;
+    PriorSensitivity sensitivity;
+    std::vector<std::string> pruned;
+    config = sensitivityAndPrune(config, record, args.has("--sensitivity"), &sensitivity, &pruned);
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
-    const OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    if (args.has("--sensitivity")) result.sensitivity = sensitivity;
+    result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;
     if (args.has("--out")) writeOfflineOutputs(result, args["--out"]);
     return 0;

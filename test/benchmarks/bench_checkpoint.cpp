@@ -49,7 +49,7 @@ struct Fixture {
     const Scenario s = makeScenario(config);
     propagator = s.propagator;
     series = s.series;
-    run = std::make_unique<EstimatorRun>(config, propagator, nullptr);
+    run = std::make_unique<EstimatorRun>(config, propagator, false);
     for (; next < static_cast<std::size_t>(kKept); ++next) process();
     path = (std::filesystem::temp_directory_path() /
             ("pc_ekf_bench_checkpoint_" + std::to_string(::getpid()) + ".ckpt"))

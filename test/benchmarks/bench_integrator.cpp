@@ -38,7 +38,8 @@ void BM_RightHandSide(benchmark::State& state) {
 }
 BENCHMARK(BM_RightHandSide)->Arg(1)->Arg(30)->Arg(1024);
 
-// One 0.03 s interval of the 30 collocation points (the one-step forecast's integration).
+// One 0.03 s interval of the 30 collocation points (the one-step forecast's
+// integration), CPU time per interval: RK4 at 1 ms and Dormand-Prince 5 at 3 ms.
 void BM_Rk4Interval(benchmark::State& state) {
   const Scenario s = makeScenario(paperConfig(100));
   const auto batch = s.model->prepare(collocationParameters(s));
@@ -56,6 +57,7 @@ void BM_Rk4Interval(benchmark::State& state) {
     t += 0.03;
     benchmark::DoNotOptimize(y.data());
   }
+  if (!y.allFinite()) state.SkipWithError("the integration is not finite");
   state.counters["max_step_ms"] = 1e3 * settings.max_step;
 }
 BENCHMARK(BM_Rk4Interval)->Args({1000, 0})->Args({3000, 1})->Unit(benchmark::kMicrosecond);

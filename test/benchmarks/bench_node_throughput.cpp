@@ -5,10 +5,15 @@
 //   ~expect (int)     estimates to wait for
 //   ~timeout (s)      give up after this long without a new estimate (default 60)
 //   ~ready (path)     touched once the estimator's publisher is connected
-// Prints one JSON object: received, first_to_last_s, samples_per_s.
+// Prints one JSON object: received, first_to_last_s, samples_per_s and
+// max_lag_ms: with a real-time replay (rate 1) each estimate's delay is its
+// arrival (wall) minus its sample stamp; max_lag_ms is the largest delay
+// minus the smallest, i.e. how far the estimator fell behind its best case
+// (the fixed offset between the bag's stamps and the wall clock cancels).
 #include <pc_ekf/ParameterEstimate.h>
 #include <ros/ros.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -21,9 +26,14 @@ using Clock = std::chrono::steady_clock;
 struct Counter {
   long received = 0;
   Clock::time_point first, last;
-  void onEstimate(const pc_ekf::ParameterEstimate::ConstPtr&) {
+  double min_delay = 1e300, max_delay = -1e300;
+  void onEstimate(const pc_ekf::ParameterEstimate::ConstPtr& msg) {
     last = Clock::now();
     if (received++ == 0) first = last;
+    const double delay =
+        std::chrono::duration<double>(last.time_since_epoch()).count() - msg->header.stamp.toSec();
+    min_delay = std::min(min_delay, delay);
+    max_delay = std::max(max_delay, delay);
   }
 };
 
@@ -61,8 +71,11 @@ int main(int argc, char** argv) {
   const double span = counter.received > 1
                           ? std::chrono::duration<double>(counter.last - counter.first).count()
                           : 0.0;
-  std::printf("{\"received\": %ld, \"expected\": %d, \"first_to_last_s\": %.6f, \"samples_per_s\": %.3f}\n",
-              counter.received, expect, span,
-              span > 0.0 ? static_cast<double>(counter.received - 1) / span : 0.0);
+  std::printf(
+      "{\"received\": %ld, \"expected\": %d, \"first_to_last_s\": %.6f, \"samples_per_s\": "
+      "%.3f, \"max_lag_ms\": %.3f}\n",
+      counter.received, expect, span,
+      span > 0.0 ? static_cast<double>(counter.received - 1) / span : 0.0,
+      counter.received > 0 ? 1e3 * (counter.max_delay - counter.min_delay) : 0.0);
   return counter.received >= expect ? 0 : 1;
 }

@@ -1,5 +1,5 @@
 // A vehicle at rest while the config's road says "bump": zero readings the
-// model cannot explain (README "Failure behaviour"). Before the support rule
+// model cannot explain (docs/reliability.md "Failure behaviour"). Before the support rule
 // the published mean reached M = -240 kg, d_CG = -1.83 m.
 #include "estimator_test_support.h"
 

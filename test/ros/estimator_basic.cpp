@@ -78,12 +78,13 @@ TEST_F(EstimatorBasic, OneEstimatePerSampleEqualToEstimateOffline) {
     area += pdf.densities[b] * (pdf.edges[b + 1] - pdf.edges[b]);
   }
   EXPECT_NEAR(area, 1.0, 1e-9);
-  // The node's cached germ draws give pcHistogram's numbers (estimate_offline's PDFs).
+  // The node's cached germ draws (one set for every parameter) give pcHistogram's
+  // numbers (estimate_offline's PDFs).
   const auto propagator = makePropagator(config_, makeModel(config_, makeRoad(config_)));
   const Eigen::MatrixXd coefficients = coefficientsOf(msgs.back());
   for (int i = 0; i < 2; ++i) {
     const Histogram h = pcHistogram(propagator->basis(), coefficients.row(i).transpose(),
-                                    config_.pdf.draws, config_.pdf.bins, config_.pdf.seed + i);
+                                    config_.pdf.draws, config_.pdf.bins, config_.pdf.seed);
     const std::size_t offset = i * (config_.pdf.bins + 1), bins = i * config_.pdf.bins;
     EXPECT_DOUBLE_EQ(pdf.edges[offset], h.edges(0)) << i;
     EXPECT_DOUBLE_EQ(pdf.edges[offset + config_.pdf.bins], h.edges(config_.pdf.bins)) << i;
@@ -140,7 +141,7 @@ TEST_F(EstimatorBasic, EstimateBatchEqualsEsMdaOffline) {
   expectSameEstimate(
       batch, estimateOffline("--config " + configPath("speed_bump.yaml") + " --method es_mda"),
       1e-9, "es_mda");
-  // ES-MDA is tighter than the one-step filter on the same record (README: case A).
+  // ES-MDA is tighter than the one-step filter on the same record (docs/results.md: case A).
   EXPECT_LT(batch.stddev[0], estimates_.messages().back().stddev[0]);
 }
 

@@ -1,4 +1,4 @@
-// estimator_node checkpoints (README "Checkpoints"), the node run as a child
+// estimator_node checkpoints (docs/reliability.md "Checkpoints"), the node run as a child
 // process: killed with SIGKILL mid-record and restarted, it resumes at its
 // last checkpoint and, fed the samples after it, publishes the estimates of
 // an uninterrupted run; SIGINT writes a checkpoint; a checkpoint from another

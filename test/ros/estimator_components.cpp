@@ -168,7 +168,7 @@ TEST(EstimatorRun, NonFiniteUpdateIsReportedNotPublishedAsNan) {
   config.node.coherence_check = false;
   const auto propagator = makePropagator(config, makeModel(config, makeRoad(config)));
   const Record record = syntheticRecord(config, 1);
-  EstimatorRun run(config, propagator, nullptr);
+  EstimatorRun run(config, propagator, false);
   const SampleEstimate first = run.process(record.samples[0], ros::Time(1, 0));
   ASSERT_FALSE(first.non_finite);
 
@@ -189,7 +189,7 @@ TEST(EstimatorRun, NonFiniteUpdateIsReportedNotPublishedAsNan) {
   const SampleEstimate next = run.process(record.samples[2], ros::Time(3, 0));
   EXPECT_FALSE(next.non_finite);
   EXPECT_EQ(next.estimate.sample_index, 3u);
-  EstimatorRun skipped(config, propagator, nullptr);
+  EstimatorRun skipped(config, propagator, false);
   skipped.process(record.samples[0], ros::Time(1, 0));
   const SampleEstimate reference = skipped.process(record.samples[2], ros::Time(3, 0));
   for (std::size_t i = 0; i < 2; ++i) {

@@ -1,4 +1,4 @@
-// Degenerate cases of EstimatorRun (README "Failure behaviour"): each has a
+// Degenerate cases of EstimatorRun (docs/reliability.md "Failure behaviour"): each has a
 // defined outcome and never puts a NaN on the wire.
 #include <limits>
 
@@ -48,7 +48,7 @@ TEST(EstimatorDegenerate, SingularInnovationCovarianceKeepsTheStateBeforeTheSamp
   c.measurement.r_relative = 0.0;
   c.measurement.r_floor = 1e-300;
   const auto propagator = makePropagator(c, makeModel(c, makeRoad(c)));
-  EstimatorRun run(c, propagator, nullptr);
+  EstimatorRun run(c, propagator, false);
   const ParameterEstimate prior = run.priorEstimate(ros::Time(0, 0));
   Measurement m;
   m.time = 0.0;
@@ -76,7 +76,7 @@ TEST(EstimatorDegenerate, SingularInnovationCovarianceKeepsTheStateBeforeTheSamp
 TEST(EstimatorDegenerate, ZeroLengthIntervalIsTwoUpdatesAtOneTime) {
   const EstimatorConfig c = speedBump();
   const auto propagator = makePropagator(c, makeModel(c, makeRoad(c)));
-  EstimatorRun run(c, propagator, nullptr);
+  EstimatorRun run(c, propagator, false);
   const Record record = syntheticRecord(c, 1);
   const SampleEstimate first = run.process(record.samples[4], ros::Time(1, 0));
   const SampleEstimate second = run.process(record.samples[4], ros::Time(1, 0));

@@ -86,8 +86,8 @@ int run(const Options& o) {
   ts.analytic_interval = o.dt;
   EstimatorTimeline timeline(ts);
   const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>(2)));
-  const auto pdfs = std::make_shared<ParameterPdfSampler>(
-      prior->basis(), prior->parameterCount(), c.pdf.draws, c.pdf.bins, c.pdf.seed);
+  const auto pdfs =
+      std::make_shared<ParameterPdfSampler>(prior->basis(), c.pdf.draws, c.pdf.bins, c.pdf.seed);
   std::unique_ptr<EstimatorRun> run;
 
   const ros::Time origin(1000000, 0);
@@ -118,8 +118,12 @@ int run(const Options& o) {
     if (timeline.addSample(stamp, m, now) != StampVerdict::kAccepted) ++dropped;
     DroppedSamples lost;
     for (const ReleasedSample& s : timeline.release(now, &lost)) {
-      if (!run) run = std::make_unique<EstimatorRun>(c, makePropagator(c, makeModel(c, timeline.road())), pdfs);
+      if (!run)
+        run = std::make_unique<EstimatorRun>(c, makePropagator(c, makeModel(c, timeline.road())),
+                                             true);
       const SampleEstimate e = run->process(s.measurement, s.stamp);
+      // The node draws these on its PDF worker; here inline (same numbers).
+      if (e.pdf) parameterPdf(*pdfs, prior->mapping().names(), *e.pdf);
       timeline.keepRoadFrom(run->oldestTime());
       ++processed;
       unhealthy += !e.estimate.healthy;

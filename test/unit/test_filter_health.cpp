@@ -3,6 +3,7 @@
 // model y' = a y to show the filters are model-agnostic.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <memory>
 #include <random>
 
@@ -34,15 +35,32 @@ TEST(Health, CoherenceDisagreementInCombinedStandardDeviations) {
 }
 
 struct GrowthProblem {
-  std::shared_ptr<ScalarGrowthModel> model = std::make_shared<ScalarGrowthModel>(0.5, 1.0);
+  std::shared_ptr<ScalarGrowthModel> model;
   std::shared_ptr<PcPropagator> propagator;
-  explicit GrowthProblem(double range, GermFamily family = GermFamily::kUniform) {
+  explicit GrowthProblem(double range, GermFamily family = GermFamily::kUniform,
+                         std::shared_ptr<ScalarGrowthModel> m = nullptr)
+      : model(m ? m : std::make_shared<ScalarGrowthModel>(0.5, 1.0)) {
     std::vector<UncertainParameter> u{{"growth_rate", 0.5, range, GermSpec{family, 2.0, 2.0}}};
     ParameterMapping mapping(*model, u);
     const PolynomialBasis basis(mapping.germs(), 3);
     const CollocationDesign design(basis, PointSequence::kHalton, 8);
     propagator = std::make_shared<PcPropagator>(model, basis, design, mapping, IntegratorSettings{1e-3});
   }
+};
+
+// y' = a y with a physical domain a < limit (the growth model itself accepts
+// any finite rate), so that some collocation points of the prior fall outside.
+class BoundedGrowthModel : public ScalarGrowthModel {
+ public:
+  explicit BoundedGrowthModel(double limit) : ScalarGrowthModel(0.5, 1.0), limit_(limit) {}
+  std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const override {
+    const std::string base = ScalarGrowthModel::invalidReason(params);
+    if (!base.empty()) return base;
+    return params[0] < limit_ ? "" : "growth_rate " + std::to_string(params[0]) + " >= limit";
+  }
+
+ private:
+  double limit_;
 };
 
 TEST(Health, GrowthModelEstimatesItsRateAndStaysCalibrated) {
@@ -100,15 +118,51 @@ TEST(Health, MassOutsideThePriorSupportIsMeasured) {
 }
 
 TEST(Health, PointsOutsideTheDomainAreReportedNotFatal) {
-  // A Gaussian germ puts some collocation points at negative initial values
-  // only through y0; here the vehicle-free check: make the rate non-finite.
-  GrowthProblem p(0.5);
-  Eigen::MatrixXd x = p.propagator->priorState();
-  x(1, 1) = std::numeric_limits<double>::infinity();  // parameter row, degree-1 term
-  const ForecastReport r = p.propagator->forecast(x, 0.0, 0.1);
-  EXPECT_EQ(r.invalid_points, 8);
-  EXPECT_FALSE(r.ok);
-  EXPECT_NE(r.first_problem.find("collocation point"), std::string::npos);
+  // Uniform a in [0.25, 0.75] (the state of an unbounded model), forecast by
+  // a model whose domain is a < 0.6, as when the parameters drifted out of
+  // it: the points beyond are dropped, the projection is least squares on the rest.
+  const double limit = 0.6, dt = 0.1;
+  const Eigen::MatrixXd prior = GrowthProblem(0.5).propagator->priorState();  // [y; a] x S
+  GrowthProblem p(0.5, GermFamily::kUniform, std::make_shared<BoundedGrowthModel>(limit));
+  const CollocationDesign& design = p.propagator->design();
+  const Eigen::MatrixXd rates = p.propagator->mapping().valuesAtGerms(design.points());  // 1 x Q
+  const Eigen::MatrixXd y0 = design.evaluateAtPoints(prior.topRows(1));                  // 1 x Q
+  std::vector<Eigen::Index> kept;
+  for (Eigen::Index q = 0; q < rates.cols(); ++q) {
+    if (rates(0, q) < limit) kept.push_back(q);
+  }
+  const int outside = static_cast<int>(rates.cols()) - static_cast<int>(kept.size());
+  ASSERT_GT(outside, 0);  // the test needs points on both sides of the limit
+  ASSERT_GE(kept.size(), static_cast<std::size_t>(p.propagator->termCount()));
+
+  Eigen::MatrixXd x = prior;
+  const ForecastReport r = p.propagator->forecast(x, 0.0, dt);
+  EXPECT_EQ(r.invalid_points, outside);
+  EXPECT_EQ(r.nonfinite_points, 0);
+  EXPECT_TRUE(r.ok) << r.first_problem;
+  EXPECT_NE(r.first_problem.find(">= limit"), std::string::npos) << r.first_problem;
+  // Independent projection: exact y0 e^{a dt} at the kept points, least squares.
+  Eigen::MatrixXd a(kept.size(), design.designMatrix().cols());
+  Eigen::VectorXd v(kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    a.row(i) = design.designMatrix().row(kept[i]);
+    v(i) = y0(0, kept[i]) * std::exp(rates(0, kept[i]) * dt);
+  }
+  const Eigen::VectorXd expected = a.colPivHouseholderQr().solve(v);
+  for (Eigen::Index j = 0; j < expected.size(); ++j) {
+    EXPECT_NEAR(x(0, j), expected(j), 1e-12) << "state coefficient " << j;
+  }
+
+  // With fewer admissible points than basis terms the forecast fails, named.
+  const double tight = 0.4;
+  int admissible = 0;
+  for (Eigen::Index q = 0; q < rates.cols(); ++q) admissible += rates(0, q) < tight;
+  ASSERT_LT(admissible, p.propagator->termCount());
+  GrowthProblem few(0.5, GermFamily::kUniform, std::make_shared<BoundedGrowthModel>(tight));
+  Eigen::MatrixXd xf = prior;
+  const ForecastReport f = few.propagator->forecast(xf, 0.0, dt);
+  EXPECT_EQ(f.invalid_points, static_cast<int>(rates.cols()) - admissible);
+  EXPECT_FALSE(f.ok);
 }
 
 TEST(Health, MeasurementsBeforeTheFilterTimeAreRejectedWithoutDamage) {

@@ -2,6 +2,8 @@
 // (docs/method.md §4.6) and over many noise seeds. Seeds are fixed, not selected.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
@@ -168,6 +170,19 @@ TEST(PaperCaseA, LargeEnkfApproximatesTheSameLinearUpdateEstimator) {
   }
 }
 
+// Smallest k with P(X < k) <= alpha for X ~ Binomial(n, p).
+int binomialLowerBound(int n, double p, double alpha) {
+  double below = 0.0;  // P(X < k)
+  for (int k = 0; k <= n; ++k) {
+    const double pk =
+        std::exp(std::lgamma(n + 1.0) - std::lgamma(k + 1.0) - std::lgamma(n - k + 1.0) +
+                 k * std::log(p) + (n - k) * std::log1p(-p));
+    if (below + pk > alpha) return k;
+    below += pk;
+  }
+  return n;
+}
+
 TEST(PaperCaseB, SquareRootCoversTheTruthAndStaysCoherentWhereThePaperRuleDoesNot) {
   const int seeds = 30;
   const EstimatorConfig base = loadConfigFile(kConfig);
@@ -189,8 +204,15 @@ TEST(PaperCaseB, SquareRootCoversTheTruthAndStaysCoherentWhereThePaperRuleDoesNo
   }
   const double sqrt_m = covered[0][0] / double(seeds), sqrt_d = covered[0][1] / double(seeds);
   const double paper_m = covered[1][0] / double(seeds), paper_d = covered[1][1] / double(seeds);
-  EXPECT_GE(sqrt_m, 0.6);
-  EXPECT_GE(sqrt_d, 0.6);
+  // A calibrated Gaussian estimate covers the truth with +-2 std in
+  // erf(sqrt 2) = 95.45 % of runs, so the covered count of 30 independent
+  // seeds is Binomial(30, 0.9545). The bound is the count below which a
+  // calibrated filter falls with probability at most 1e-3: 24 (P(X <= 23) =
+  // 3.3e-4, P(X <= 24) = 2.0e-3). Measured on these seeds: 27 and 27.
+  const int min_covered = binomialLowerBound(seeds, std::erf(2.0 / std::sqrt(2.0)), 1e-3);
+  EXPECT_EQ(min_covered, 24);
+  EXPECT_GE(covered[0][0], min_covered) << "M coverage " << sqrt_m;
+  EXPECT_GE(covered[0][1], min_covered) << "d_CG coverage " << sqrt_d;
   EXPECT_GT(covered[0][0] + covered[0][1], covered[1][0] + covered[1][1]);
   EXPECT_GE(flagged[1], 0.2 * seeds);
   EXPECT_LE(flagged[0], 0.05 * seeds);

@@ -12,6 +12,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "pc_ekf/io/checkpoint.h"
 
@@ -244,6 +245,27 @@ TEST(Checkpoint, UnwritableDirectoryIsReportedAndLeavesNoTemporary) {
   EXPECT_EQ(readCheckpoint(good).full.samples, 36);
   std::filesystem::remove(good + ".tmp");
   std::filesystem::remove(good);
+
+  // A write that fails after the temporary was created and filled (the rename
+  // over a directory fails) removes the temporary: the directory holds only
+  // what was there before.
+  const std::filesystem::path dir = tempPath("rename_fails");
+  std::filesystem::create_directories(dir / "run.ckpt" / "occupied");
+  const std::string blocked = (dir / "run.ckpt").string();
+  try {
+    writeCheckpoint(sampleCheckpoint(), blocked);
+    FAIL() << "renamed a file over a non-empty directory";
+  } catch (const CheckpointError& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot rename " + blocked + ".tmp"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(std::filesystem::exists(blocked + ".tmp")) << "the temporary was left behind";
+  std::vector<std::string> left;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    left.push_back(entry.path().filename().string());
+  }
+  EXPECT_EQ(left, std::vector<std::string>{"run.ckpt"});
+  std::filesystem::remove_all(dir);
 }
 
 TEST(Checkpoint, RoadUnderFourContactsRoundTripsAndKeepsItsWidth) {

@@ -1,7 +1,6 @@
 // Roll-plane dynamics (docs/method.md §1.4, §7): step-refinement convergence, equilibrium
 // at rest, batch independence, non-finite columns, cost.
 #include <gtest/gtest.h>
-#include <time.h>
 
 #include <algorithm>
 #include <cmath>
@@ -218,32 +217,6 @@ TEST(RollPlaneDynamics, NonFiniteColumnDoesNotSpread) {
   integrate(model, *batch, 0.0, 1.0, dirty, IntegratorSettings());
   EXPECT_FALSE(dirty.col(2).allFinite());
   for (int q : {0, 1, 3}) EXPECT_TRUE((dirty.col(q) == clean.col(q)).all()) << q;
-}
-
-double threadCpuMicroseconds() {
-  timespec ts;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e6 + ts.tv_nsec * 1e-3;
-}
-
-TEST(RollPlaneDynamics, Rk4CostPerSampleInterval) {
-  // Reported figure: one 0.03 s forecast (N = 100 sampling) for Q = 30 at max_step 1e-3;
-  // best of 10 runs of CPU time, so a loaded machine does not inflate it.
-  const RollPlaneModel model(VehicleParameters(),
-                             std::make_shared<SpeedBumpRoad>(SpeedBumpSettings()));
-  const Eigen::MatrixXd params = randomColumns(model, 30);
-  const auto batch = model.prepare(params);
-  Eigen::ArrayXXd y;
-  double best = std::numeric_limits<double>::infinity();
-  for (int run = 0; run < 10; ++run) {
-    y = batch->initialState();
-    const double start = threadCpuMicroseconds();
-    for (int k = 0; k < 100; ++k) integrate(model, *batch, 0.03 * k, 0.03 * (k + 1), y, {});
-    best = std::min(best, (threadCpuMicroseconds() - start) / 100.0);
-  }
-  std::printf("RK4, Q = 30, max_step 1e-3: %.1f us CPU per 0.03 s interval\n", best);
-  EXPECT_TRUE(y.allFinite());
-  EXPECT_GT(y.abs().maxCoeff(), 1e-3);  // the bump moved the bodies
 }
 
 }  // namespace

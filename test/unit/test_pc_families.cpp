@@ -319,6 +319,21 @@ TEST(Germ, NamesRoundTrip) {
   EXPECT_EQ(describe(gaussian()), "gaussian");
 }
 
+// germMean / germStddev (closed forms) against the family's own Gauss rule.
+TEST(GermMoments, ClosedFormsEqualTheGaussRuleMoments) {
+  for (const GermSpec& g :
+       {GermSpec{GermFamily::kBeta, 2.0, 2.0}, GermSpec{GermFamily::kBeta, 1.5, 4.0},
+        GermSpec{GermFamily::kUniform, 0, 0}, GermSpec{GermFamily::kGaussian, 0, 0},
+        GermSpec{GermFamily::kGamma, 2.5, 0}}) {
+    const QuadratureRule rule = OrthonormalFamily(g).gaussRule(6);
+    const double mean = rule.weights.dot(rule.nodes);
+    const double var = rule.weights.dot((rule.nodes.array() - mean).square().matrix());
+    EXPECT_NEAR(germMean(g), mean, 1e-12) << describe(g);
+    EXPECT_NEAR(germStddev(g), std::sqrt(var), 1e-12) << describe(g);
+  }
+  EXPECT_NEAR(germStddev(GermSpec{}), 1.0 / std::sqrt(5.0), 1e-15);  // Beta(2, 2)
+}
+
 }  // namespace
 }  // namespace pc_ekf
 

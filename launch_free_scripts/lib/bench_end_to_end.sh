@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Part of bench.sh: what a user runs, timed whole. Each configuration is run
+# with `estimate_offline --config CFG --method one_step --out DIR` (start-up,
+# design, filter, PDFs, every output file) three times; the best wall time
+# counts, and the real-time factor is the record's duration over it.
+#   bench_end_to_end.sh BIN_DIR OUT_DIR   -> OUT_DIR/end_to_end.json
+#   rtf_n11_end_to_end       test/benchmarks/roll_plane_tolerances.yaml (n = 11)
+#   full_car_tolerances_rtf  test/benchmarks/full_car_tolerances.yaml (n = 12)
+#   rtf_paper_end_to_end     config/speed_bump.yaml (n = 2, N = 10)
+set -uo pipefail
+here=$(cd "$(dirname "$0")" && pwd)
+source "$here/common.sh"
+pc_ekf_require_sources bench_end_to_end.sh
+bin=$1
+out=$2
+mkdir -p "$out"
+runs=${PC_EKF_BENCH_E2E_RUNS:-3}
+
+# best_wall CONFIG NAME -> prints the best wall time in s (null if a run failed)
+best_wall() {
+  local config=$1 name=$2 best=1e9 t0 t1
+  for i in $(seq "$runs"); do
+    t0=$(date +%s.%N)
+    if ! "$bin/estimate_offline" --config "$config" --method one_step --out "$out/$name.$i" \
+      >"$out/$name.$i.json" 2>"$out/$name.$i.err"; then
+      echo null
+      return
+    fi
+    t1=$(date +%s.%N)
+    best=$(awk -v a="$best" -v t0="$t0" -v t1="$t1" 'BEGIN { w = t1 - t0; printf "%.6f", (w < a) ? w : a }')
+  done
+  echo "$best"
+}
+
+n11=$PC_EKF_ROOT/test/benchmarks/roll_plane_tolerances.yaml
+car=$PC_EKF_ROOT/test/benchmarks/full_car_tolerances.yaml
+paper=$PC_EKF_ROOT/config/speed_bump.yaml
+n11_wall=$(best_wall "$n11" n11)
+car_wall=$(best_wall "$car" full_car)
+paper_wall=$(best_wall "$paper" paper)
+/usr/bin/python3 - "$out/end_to_end.json" "$n11_wall" "$car_wall" "$paper_wall" "$runs" <<'PY'
+import json, sys
+path, n11, car, paper, runs = sys.argv[1:]
+def rtf(wall, duration=3.0):  # all three records are 3 s long
+    return None if wall == "null" else duration / float(wall)
+def wall(w):
+    return None if w == "null" else float(w)
+json.dump({
+    "rtf_n11_end_to_end": rtf(n11),
+    "full_car_tolerances_rtf": rtf(car),
+    "rtf_paper_end_to_end": rtf(paper),
+    "n11_end_to_end_wall_s": wall(n11),
+    "full_car_tolerances_wall_s": wall(car),
+    "paper_end_to_end_wall_s": wall(paper),
+    "runs": int(runs),
+    "command": "estimate_offline --config CFG --method one_step --out DIR, best wall time of the runs",
+}, open(path, "w"), indent=1)
+PY
+pc_ekf_log "end to end: $(tr -d '\n' <"$out/end_to_end.json")"

@@ -1,0 +1,69 @@
+#include "pc_ekf/io/record_sensitivity.h"
+
+#include <cstdio>
+
+#include "pc_ekf/io/estimation_setup.h"
+
+namespace pc_ekf {
+
+std::vector<double> sampleTimes(const MeasurementSeries& series) {
+  std::vector<double> t;
+  for (const auto& m : series) {
+    if (t.empty() || m.time > t.back()) t.push_back(m.time);
+  }
+  return t;
+}
+
+PriorSensitivity recordSensitivity(const EstimatorConfig& c,
+                                   std::shared_ptr<const MechanicalModel> model,
+                                   const std::vector<double>& times) {
+  const auto propagator = makePropagator(c, std::move(model));
+  return priorSensitivity(*propagator, times, channelIndices(c));
+}
+
+EstimatorConfig pruneTolerances(const EstimatorConfig& c, const PriorSensitivity& s,
+                                std::vector<std::string>* pruned) {
+  EstimatorConfig out = c;
+  if (!(c.tolerances_prune > 0.0)) return out;
+  out.uncertain.resize(c.loadCount());
+  out.tolerance_count = 0;
+  std::vector<double> drift;
+  for (int i = 0; i < static_cast<int>(c.uncertain.size()); ++i) {
+    const bool tolerance = i >= c.loadCount();
+    if (tolerance && s.largestTotal(i) < c.tolerances_prune) {
+      char line[200];
+      std::snprintf(line, sizeof(line),
+                    "%s fixed at %.6g: largest total Sobol index %.2e below tolerances_prune %.2e",
+                    c.uncertain[i].name.c_str(), c.uncertain[i].nominal, s.largestTotal(i),
+                    c.tolerances_prune);
+      if (pruned) pruned->push_back(line);
+      continue;
+    }
+    if (tolerance) {
+      out.uncertain.push_back(c.uncertain[i]);
+      ++out.tolerance_count;
+    }
+    if (!c.safeguards.drift.empty()) drift.push_back(c.safeguards.drift[i]);
+  }
+  out.safeguards.drift = drift;
+  // truth.xi follows the parameters it belongs to.
+  std::vector<double> xi;
+  for (int i = 0; i < static_cast<int>(c.uncertain.size()); ++i) {
+    bool kept = false;
+    for (const auto& u : out.uncertain) kept = kept || u.name == c.uncertain[i].name;
+    if (kept && i < static_cast<int>(c.truth.xi.size())) xi.push_back(c.truth.xi[i]);
+  }
+  out.truth.xi = xi;
+  for (auto& change : out.truth.schedule) {
+    std::vector<double> keep;
+    for (int i = 0; i < static_cast<int>(c.uncertain.size()); ++i) {
+      bool kept = false;
+      for (const auto& u : out.uncertain) kept = kept || u.name == c.uncertain[i].name;
+      if (kept) keep.push_back(change.xi[i]);
+    }
+    change.xi = keep;
+  }
+  return out;
+}
+
+}  // namespace pc_ekf

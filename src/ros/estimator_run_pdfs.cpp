@@ -1,0 +1,72 @@
+#include "pc_ekf/ros/estimator_run_pdfs.h"
+
+#include "pc_ekf/ros/message_conversion.h"
+
+namespace pc_ekf {
+
+ParameterPdf parameterPdf(const ParameterPdfSampler& sampler, const std::vector<std::string>& names,
+                          const PdfRequest& r) {
+  return pdfMessage(names, sampler.histograms(r.coefficients), {}, r.sample_index, r.stamp);
+}
+
+PdfWorker::PdfWorker(std::shared_ptr<const ParameterPdfSampler> sampler,
+                     std::vector<std::string> names,
+                     std::function<void(const ParameterPdf&)> publish)
+    : sampler_(std::move(sampler)), names_(std::move(names)), publish_(std::move(publish)) {
+  thread_ = std::thread([this] { run(); });
+}
+
+PdfWorker::~PdfWorker() {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stop_ = true;
+    queue_.clear();
+  }
+  wake_.notify_all();
+  thread_.join();
+}
+
+void PdfWorker::submit(PdfRequest r) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    queue_.push_back(std::move(r));
+  }
+  wake_.notify_all();
+}
+
+void PdfWorker::flush() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  idle_.wait(lock, [this] { return queue_.empty() && !busy_; });
+}
+
+std::size_t PdfWorker::queued() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return queue_.size() + (busy_ ? 1 : 0);
+}
+
+std::uint64_t PdfWorker::published() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return published_;
+}
+
+void PdfWorker::run() {
+  std::unique_lock<std::mutex> lock(mutex_);
+  for (;;) {
+    wake_.wait(lock, [this] { return stop_ || !queue_.empty(); });
+    if (stop_) break;
+    PdfRequest r = std::move(queue_.front());
+    queue_.pop_front();
+    busy_ = true;
+    lock.unlock();
+    const ParameterPdf msg = parameterPdf(*sampler_, names_, r);
+    publish_(msg);  // ros::Publisher::publish is thread-safe
+    lock.lock();
+    busy_ = false;
+    ++published_;
+    if (queue_.empty()) idle_.notify_all();
+  }
+  busy_ = false;
+  idle_.notify_all();
+}
+
+}  // namespace pc_ekf

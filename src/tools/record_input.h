@@ -1,0 +1,57 @@
+// The record a tool estimates from: a bag (road and samples; the bag's road
+// replaces the config's), a measurement CSV, or without either the synthetic
+// data the config describes.
+#pragma once
+
+#include <iostream>
+#include <memory>
+#include <string>
+
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/io/record_sensitivity.h"
+#include "pc_ekf/ros/bag_io.h"
+
+namespace pc_ekf {
+
+struct RecordInput {
+  std::shared_ptr<const MechanicalModel> model;
+  MeasurementSeries series;
+};
+
+// `bag` and `csv` are paths ("" when not given; at most one of them).
+inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& bag,
+                              const std::string& csv, std::uint64_t seed) {
+  RecordInput r;
+  std::shared_ptr<const ContactRoad> bag_road;
+  if (!bag.empty()) {
+    BagRecord record = readBag(bag, bagReadOptions(config));
+    for (std::size_t i = 0; i < record.warnings.size() && i < 5; ++i) {
+      std::cerr << "[bag] " << bag << ": " << record.warnings[i] << "\n";
+    }
+    if (record.warnings.size() > 5) {
+      std::cerr << "[bag] ... and " << record.warnings.size() - 5 << " more warnings\n";
+    }
+    bag_road = std::make_shared<SampledRoad>(record.road_contacts.t, record.road_contacts.heights);
+    r.series = std::move(record.samples);
+  }
+  r.model = makeModel(config, makeRoad(config, bag_road));
+  if (!csv.empty()) r.series = readMeasurementCsvFile(csv, config.model_type->channelNames());
+  if (bag.empty() && csv.empty()) r.series = synthesizeFromConfig(config, *r.model, seed);
+  return r;
+}
+
+// The record's sensitivity (printed as a table when `print`) and the config
+// with tolerances_prune applied; what was fixed is printed and kept in `pruned`.
+inline EstimatorConfig sensitivityAndPrune(const EstimatorConfig& config, const RecordInput& record,
+                                           bool print, PriorSensitivity* sensitivity,
+                                           std::vector<std::string>* pruned) {
+  if (!print && !(config.tolerances_prune > 0.0)) return config;
+  *sensitivity = recordSensitivity(config, record.model, sampleTimes(record.series));
+  if (print) std::cerr << sensitivityTable(*sensitivity);
+  const EstimatorConfig out = pruneTolerances(config, *sensitivity, pruned);
+  for (const auto& line : *pruned) std::cerr << "[tolerances_prune] " << line << "\n";
+  return out;
+}
+
+}  // namespace pc_ekf

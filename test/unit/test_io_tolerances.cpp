@@ -1,0 +1,211 @@
+// tolerances: and vehicle_file: (docs/configuration.md): the nuisance
+// parameters they make, in which order and with which nominal, and each kind of
+// bad input refused with a message naming the key.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/vehicle_file.h"
+
+namespace pc_ekf {
+namespace {
+
+const std::string kDir = std::string(PC_EKF_SOURCE_DIR) + "/config/";
+#define PC_EKF_LOAD_ENTRIES                                         \
+  "uncertain:\n"                                                    \
+  "  - {name: added_mass, nominal: 200.0, relative_range: 0.5}\n"   \
+  "  - {name: added_mass_position, nominal: 0.762, relative_range: 0.25}\n"
+const char* kLoadOnly = PC_EKF_LOAD_ENTRIES;
+const char* kLoad =
+    "uncertain:\n"
+    "  - {name: added_mass, nominal: 200.0, relative_range: 0.5}\n"
+    "  - {name: added_mass_position, nominal: 0.762, relative_range: 0.25}\n"
+    "pc: {order: 2}\n"
+    "collocation: {points: 40}\n";
+
+std::string errorOf(const std::string& yaml) {
+  try {
+    const EstimatorConfig c = parseConfigString(yaml, "bad.yaml");
+    makePropagator(c, makeModel(c, makeRoad(c)));
+  } catch (const ConfigError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+double vehicleValue(const EstimatorConfig& c, const std::string& name) {
+  const auto& names = c.model_type->parameterNames();
+  const auto at = std::find(names.begin(), names.end(), name) - names.begin();
+  return c.modelParameters()->values[at];
+}
+
+std::filesystem::path tempDir() {
+  std::string pattern = (std::filesystem::temp_directory_path() / "pc_ekf_tol_XXXXXX").string();
+  if (!mkdtemp(pattern.data())) throw std::runtime_error("mkdtemp failed");
+  return pattern;
+}
+
+TEST(Tolerances, NuisanceParametersFollowTheLoadInTheModelsOrder) {
+  const EstimatorConfig c = parseConfigString(std::string(kLoad) +
+                                                  "vehicle: {spring_linear_left: 20000.0}\n"
+                                                  "tolerances:\n"
+                                                  "  tyre_stiffness_right: 0.1\n"
+                                                  "  spring_linear_left: 0.05\n"
+                                                  "  damping_left: {relative_range: 0.2, germ: {family: uniform}}\n"
+                                                  "  bar_length: 0\n",
+                                              "t.yaml");
+  ASSERT_EQ(c.uncertain.size(), 5u);  // bar_length: 0 leaves it fixed
+  EXPECT_EQ(c.loadCount(), 2);
+  EXPECT_EQ(c.tolerance_count, 3);
+  EXPECT_EQ(c.uncertain[0].name, "added_mass");
+  EXPECT_EQ(c.uncertain[2].name, "damping_left");  // model order, not the file's
+  EXPECT_EQ(c.uncertain[3].name, "spring_linear_left");
+  EXPECT_EQ(c.uncertain[4].name, "tyre_stiffness_right");
+  EXPECT_DOUBLE_EQ(c.uncertain[3].nominal, 20000.0);  // the vehicle's value
+  EXPECT_DOUBLE_EQ(c.uncertain[3].relative_range, 0.05);
+  EXPECT_EQ(c.uncertain[3].germ.family, GermFamily::kBeta);
+  EXPECT_DOUBLE_EQ(c.uncertain[3].germ.alpha, 2.0);
+  EXPECT_EQ(c.uncertain[2].germ.family, GermFamily::kUniform);
+  EXPECT_EQ(c.truth.xi.size(), 5u);  // tolerances' truth: the vehicle (xi 0)
+  EXPECT_DOUBLE_EQ(c.truth.xi[3], 0.0);
+}
+
+TEST(Tolerances, TruthVehicleMayLieOutsideTheTolerance) {
+  const EstimatorConfig c = parseConfigString(std::string(kLoad) +
+                                                  "tolerances: {spring_linear_left: 0.1}\n"
+                                                  "truth: {xi: [0.2, -0.3], vehicle: {spring_linear_left: 23228.64}}\n",
+                                              "t.yaml");
+  ASSERT_EQ(c.truth.xi.size(), 3u);
+  EXPECT_NEAR(c.truth.xi[2], (23228.64 / 19357.2 - 1.0) / 0.1, 1e-12);  // 2: outside [-1, 1]
+  const auto model = makeModel(c, makeRoad(c));
+  EXPECT_DOUBLE_EQ(truthParameters(c, *model)[model->parameterIndex("spring_linear_left")],
+                   19357.2 * (1.0 + 0.1 * c.truth.xi[2]));
+}
+
+TEST(Tolerances, DriftPerLoadParameterLeavesTheVehicleFixed) {
+  const EstimatorConfig c = parseConfigString(std::string(kLoad) +
+                                                  "tolerances: {bar_inertia: 0.15}\n"
+                                                  "filter: {drift: [2.0, 0.0]}\n",
+                                              "t.yaml");
+  EXPECT_EQ(c.safeguards.drift, (std::vector<double>{2.0, 0.0, 0.0}));
+}
+
+TEST(Tolerances, BadInputNamesTheKey) {
+  EXPECT_NE(errorOf(std::string(kLoad) + "tolerances: {spring_rate: 0.1}\n")
+                .find("'tolerances.spring_rate': unknown key"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string(kLoad) + "tolerances: {spring_rate: 0.1}\n").find("spring_linear_left"),
+            std::string::npos);  // the model's names are listed
+  EXPECT_NE(errorOf(std::string(kLoad) + "tolerances: {added_mass: 0.1}\n").find("under uncertain:"),
+            std::string::npos);
+  EXPECT_NE(errorOf(std::string(kLoad) + "tolerances: {damping_left: -0.1}\n")
+                .find("tolerances.damping_left"),
+            std::string::npos);
+  // A mass may not reach zero: the tolerance's end is outside the model's domain.
+  EXPECT_NE(errorOf(std::string(kLoad) + "tolerances: {unsprung_mass_left: 1.2}\n")
+                .find("'tolerances.unsprung_mass_left'"),
+            std::string::npos);
+  EXPECT_EQ(errorOf(std::string(kLoad) + "tolerances: {unsprung_mass_left: 0.5}\n"), "");
+  // Without uncertain: a tolerance alone is a valid config (calibration).
+  EXPECT_EQ(errorOf("tolerances: {bar_inertia: 0.15}\npc: {order: 2}\n"), "");
+  EXPECT_NE(errorOf("tolerances: {bar_inertia: 0}\n").find("'tolerances'"), std::string::npos);
+}
+
+TEST(Tolerances, TensorGaussRuleRefusedForManyParameters) {
+  const std::string e = errorOf(std::string(kLoadOnly) +
+                                "tolerances: {damping_left: 0.2, damping_right: 0.2, "
+                                "spring_linear_left: 0.1, spring_linear_right: 0.1, bar_inertia: 0.1}\n"
+                                "collocation: {sequence: gauss, points: 5}\n");
+  EXPECT_NE(e.find("'collocation.sequence'"), std::string::npos) << e;
+  EXPECT_NE(e.find("5^7 = 78125"), std::string::npos) << e;
+}
+
+TEST(VehicleFile, MergedRelativeToTheConfigTheFileWins) {
+  const auto dir = tempDir();
+  std::filesystem::create_directories(dir / "vehicles");
+  std::ofstream(dir / "vehicles" / "car.yaml")
+      << "vehicle: {spring_linear_left: 20100.5, bar_mass: 600}\n"
+         "tolerances: {spring_linear_left: {relative_range: 0.01}}\n";
+  std::ofstream(dir / "live.yaml") << kLoad
+                                   << "vehicle_file: vehicles/car.yaml\n"
+                                      "vehicle: {bar_mass: 590, bar_inertia: 60}\n"
+                                      "tolerances: {spring_linear_left: 0.1, bar_inertia: 0.15}\n";
+  const EstimatorConfig c = loadConfigFile((dir / "live.yaml").string());
+  EXPECT_EQ(c.vehicle_file, (dir / "vehicles" / "car.yaml").string());
+  EXPECT_DOUBLE_EQ(vehicleValue(c, "bar_mass"), 600.0);   // the file's
+  EXPECT_DOUBLE_EQ(vehicleValue(c, "bar_inertia"), 60.0);  // the config's (not in the file)
+  ASSERT_EQ(c.tolerance_count, 2);
+  EXPECT_EQ(c.uncertain[2].name, "spring_linear_left");
+  EXPECT_DOUBLE_EQ(c.uncertain[2].relative_range, 0.01);  // the file's
+  EXPECT_DOUBLE_EQ(c.uncertain[2].nominal, 20100.5);
+  EXPECT_DOUBLE_EQ(c.uncertain[3].relative_range, 0.15);  // the config's
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VehicleFile, BadFilesAreNamed) {
+  const auto dir = tempDir();
+  const auto load = [&](const std::string& file_text, const std::string& key) {
+    std::ofstream(dir / "v.yaml") << file_text;
+    std::ofstream(dir / "c.yaml") << kLoad << "vehicle_file: " << key << "\n";
+    try {
+      loadConfigFile((dir / "c.yaml").string());
+    } catch (const ConfigError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(load("vehicle: {}\n", "missing.yaml").find("cannot open"), std::string::npos);
+  EXPECT_NE(load("vehicle: {}\npc: {order: 2}\n", "v.yaml").find("only vehicle: and tolerances:"),
+            std::string::npos);
+  EXPECT_NE(load("vehicle: {bar_mass: -3}\n", "v.yaml").find("vehicle.bar_mass"), std::string::npos);
+  EXPECT_NE(load("vehicle: [1, 2\n", "v.yaml").find("not valid YAML"), std::string::npos);
+  EXPECT_EQ(load("vehicle: {bar_mass: 600}\n", "v.yaml"), "");
+  std::filesystem::remove_all(dir);
+}
+
+// What calibrate_vehicle writes reads back as the same values and tolerances.
+TEST(VehicleFile, WrittenFileReadsBackExactly) {
+  VehicleFile f;
+  f.header = {"test"};
+  f.vehicle = {{"bar_mass", roundTripText(580.123456789012)}, {"spring_linear_left", roundTripText(0.1 + 0.2)}};
+  f.tolerances = {{"spring_linear_left", 0.1 + 0.2, 1.0 / 3.0, GermSpec{}},
+                  {"bar_mass", 580.0, 0.01, GermSpec{GermFamily::kBeta, 2.0, 5.0}}};
+  const auto dir = tempDir();
+  std::ofstream(dir / "v.yaml") << vehicleFileText(f);
+  std::ofstream(dir / "c.yaml") << kLoad << "vehicle_file: v.yaml\n";
+  const EstimatorConfig c = loadConfigFile((dir / "c.yaml").string());
+  EXPECT_EQ(vehicleValue(c, "bar_mass"), 580.123456789012);
+  ASSERT_EQ(c.tolerance_count, 2);
+  EXPECT_EQ(c.uncertain[2].name, "bar_mass");
+  EXPECT_EQ(c.uncertain[2].nominal, 580.0);  // differs from the value: written
+  EXPECT_EQ(c.uncertain[2].germ.beta, 5.0);
+  EXPECT_EQ(c.uncertain[3].nominal, 0.1 + 0.2);
+  EXPECT_EQ(c.uncertain[3].relative_range, 1.0 / 3.0);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(VehicleLive, ToleranceOnEveryVehicleValue) {
+  const EstimatorConfig c = loadConfigFile(kDir + "vehicle_live.yaml");
+  for (const auto& name : c.model_type->parameterNames()) {
+    if (name == "gravity" || name == "added_mass" || name == "added_mass_position") continue;
+    bool listed = false;
+    for (int i = c.loadCount(); i < static_cast<int>(c.uncertain.size()); ++i) {
+      listed = listed || c.uncertain[i].name == name;
+    }
+    EXPECT_TRUE(listed) << name;
+  }
+  EXPECT_EQ(c.loadCount(), 2);
+}
+
+}  // namespace
+}  // namespace pc_ekf
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
