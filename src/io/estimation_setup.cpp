@@ -167,7 +167,7 @@ std::vector<int> channelIndices(const EstimatorConfig& c) {
 std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
                                                   const MechanicalModel& model) {
   // Non-owning: the estimator's model is the caller's.
-  if (!c.truth.vehicle && !c.truth.model) {
+  if (!c.truth.model) {
     return std::shared_ptr<const MechanicalModel>(std::shared_ptr<void>(), &model);
   }
   const ContactRoad* road = model.contactRoad();
@@ -244,12 +244,6 @@ ContactSeries sampleContactRoad(const ContactRoad& road, double t_end, double ra
     for (int c = 0; c < road.contactCount(); ++c) r.heights[c].push_back(y(c));
   }
   return r;
-}
-
-RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate) {
-  if (road.contactCount() != 2) throw std::invalid_argument("sampleRoad: a two-contact road expected");
-  const ContactSeries s = sampleContactRoad(road, t_end, rate);
-  return RoadSeries{s.t, s.heights[0], s.heights[1]};
 }
 
 }  // namespace pc_ekf

@@ -13,7 +13,6 @@
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/pdf_sampler.h"
 #include "pc_ekf/io/measurement_csv.h"
-#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 
@@ -75,10 +74,8 @@ std::vector<double> syntheticSampleTimes(const EstimatorConfig& c);
 SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const MechanicalModel& truth,
                                         std::uint64_t seed);
 
-// `road` sampled at `rate` Hz from t = 0 until the first time >= t_end: the
-// road/profile stream a bag or a live vehicle would carry.
-RoadSeries sampleRoad(const ContactRoad& road, double t_end, double rate);
-// The same for any number of contacts.
+// `road` sampled at `rate` Hz from t = 0 until the first time >= t_end, under
+// every contact: the road stream a bag or a live vehicle would carry.
 ContactSeries sampleContactRoad(const ContactRoad& road, double t_end, double rate);
 
 }  // namespace pc_ekf

@@ -385,13 +385,8 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
     }
   }
   if (override_vehicle) {
-    const auto p = c.model_type->read(v, *c.model);
+    c.truth.model = c.model_type->read(v, *c.model);
     v.finish();
-    if (c.rollPlane()) {
-      c.truth.vehicle = rollPlaneVehicle(*p);
-    } else {
-      c.truth.model = p;
-    }
   }
   // A tolerance's truth: the truth vehicle's value, as a germ coordinate that
   // may lie outside the tolerance (a vehicle the tolerance does not cover).
@@ -450,13 +445,17 @@ std::string toString(RoadSource s) {
   return "?";
 }
 
+std::vector<std::string> defaultJointNames(const ModelType& type) {
+  std::vector<std::string> names;
+  for (const auto& s : type.suspensions()) names.push_back(s.default_joint);
+  return names;
+}
+
 std::shared_ptr<const ModelParameters> EstimatorConfig::modelParameters() const {
-  if (rollPlane()) return rollPlaneParameters(vehicle);
   return model ? model : model_type->defaults();
 }
 
 std::shared_ptr<const ModelParameters> EstimatorConfig::truthModelParameters() const {
-  if (rollPlane()) return rollPlaneParameters(truth.vehicle ? *truth.vehicle : vehicle);
   return truth.model ? truth.model : modelParameters();
 }
 
@@ -499,7 +498,6 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
     c.model = c.model_type->read(v, *c.model_type->defaults());
     v.finish();
   }
-  if (c.rollPlane()) c.vehicle = rollPlaneVehicle(*c.model);
   c.uncertain = readUncertain(root, *c.model_type, *c.model);
   const std::vector<UncertainParameter> tolerances =
       readTolerances(root, *c.model_type, *c.model, c.uncertain);

@@ -18,7 +18,6 @@
 #include "pc_ekf/io/model_type.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/road_input.h"
-#include "pc_ekf/model/roll_plane_model.h"
 #include "pc_ekf/pc/basis_truncation.h"
 #include "pc_ekf/pc/collocation_design.h"
 #include "pc_ekf/pc/germ.h"
@@ -55,7 +54,7 @@ struct SamplingConfig {
 };
 
 struct MeasurementConfig {
-  std::vector<std::string> channels{"u1", "u2", "v1", "v2"};
+  std::vector<std::string> channels = rollPlaneType()->channelNames();  // model.type's (parsed)
   double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
   double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
   // Filter R (see NoiseModel): paper R_jj = max(r_floor, (r_relative z_obs,j)^2);
@@ -63,7 +62,7 @@ struct MeasurementConfig {
   NoiseRule r_rule = NoiseRule::kPaper;
   double r_relative = 0.01;
   double r_floor = 1e-12;
-  std::vector<double> sensor_std;  // sensor rule: absolute std per channel u1, u2, v1, v2
+  std::vector<double> sensor_std;  // sensor rule: absolute std per channel (the model's order)
 };
 
 // From `time` on the truth is at germ point `xi` (synthetic data).
@@ -75,12 +74,9 @@ struct TruthChange {
 struct TruthConfig {
   std::vector<double> xi;  // germ coordinates of the truth, one per uncertain parameter
   std::uint64_t seed = 1;  // measurement-noise seed
-  // `vehicle` with truth.vehicle's keys applied, resolved when parsed; unset:
-  // the truth uses `vehicle`.
-  std::optional<VehicleParameters> vehicle;
-  // Other model types: the model's parameters with truth.vehicle applied (unset: `model`'s).
+  // The model's values with truth.vehicle applied (unset: the config's `model`).
   std::shared_ptr<const ModelParameters> model;
-  SensorImperfections sensor;  // per model channel (roll plane: u1, u2, v1, v2)
+  SensorImperfections sensor;  // per model channel
   TimingImperfections timing;
   std::vector<TruthChange> schedule;  // times increasing, > 0
 };
@@ -148,12 +144,15 @@ struct PdfConfig {
 
 // estimator_node only (section `node:`); the CLIs accept and ignore it.
 enum class BatchMethod { kEsMda, kWholeSet };
+
+// A model type's default joint names, in suspensions() order.
+std::vector<std::string> defaultJointNames(const ModelType& type);
 std::string toString(BatchMethod m);
 
 struct NodeConfig {
-  // Any model: one JointState name per suspension (ModelType::suspensions()
-  // order; node.joints.<config_key>). Roll plane: left (u1, v1), right (u2, v2).
-  std::vector<std::string> joint_names{"left_suspension", "right_suspension"};
+  // One JointState name per suspension (ModelType::suspensions() order;
+  // node.joints.<config_key>); parsed: the model's defaults, then node.joints.
+  std::vector<std::string> joint_names = defaultJointNames(*rollPlaneType());
   bool reset_on_time_jump = false;               // else a sample stamped back in time is dropped
   double time_jump_tolerance = 0.5;              // s: a step back beyond this is a time jump
   bool publish_pdf = true;
@@ -169,17 +168,16 @@ struct NodeConfig {
 
 struct EstimatorConfig {
   std::string source = "<config>";  // file name, for messages
-  // model.type and the model's `vehicle:` section. For roll_plane, `vehicle`
-  // is the source of truth (code may edit it); other types keep theirs in
-  // `model`.
+  // model.type (its description: model_type->description(), whose
+  // parameters() table gives names, units, defaults and domains) and the
+  // values of its `vehicle:` section (the full parameter vector, settings
+  // and choices in the description's order).
   std::shared_ptr<const ModelType> model_type = rollPlaneType();
-  std::shared_ptr<const ModelParameters> model;
-  VehicleParameters vehicle;
-  // The model's settings: from `vehicle` for roll_plane, else `model`.
+  std::shared_ptr<const ModelParameters> model = model_type->defaults();
+  // `model` (the type's defaults when unset).
   std::shared_ptr<const ModelParameters> modelParameters() const;
   // The truth's (truth.vehicle applied).
   std::shared_ptr<const ModelParameters> truthModelParameters() const;
-  bool rollPlane() const { return model_type->name() == "roll_plane"; }
   // What is estimated: first the `uncertain:` entries (the load), then the
   // last `tolerance_count` entries from `tolerances:` (nuisance parameters:
   // vehicle values known to a tolerance, in the model's parameter order).

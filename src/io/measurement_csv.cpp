@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "pc_ekf/model/roll_plane_model.h"
+
 namespace pc_ekf {
 namespace {
 
@@ -96,8 +98,7 @@ std::ifstream openOrThrow(const std::string& path) {
 }  // namespace
 
 const std::vector<std::string>& rollPlaneChannels() {
-  static const std::vector<std::string> c{"u1", "u2", "v1", "v2"};
-  return c;
+  return rollPlaneDescription().channelNames();
 }
 
 MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
@@ -145,12 +146,15 @@ void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series,
   }
 }
 
-RoadSeries readRoadCsv(std::istream& in, const std::string& source) {
-  RoadSeries road;
-  for (const auto& row : readTable(in, source, {"t", "y1", "y2"}, false)) {
+ContactSeries readContactRoadCsv(std::istream& in, const std::string& source,
+                                 const std::vector<std::string>& columns) {
+  std::vector<std::string> header{"t"};
+  header.insert(header.end(), columns.begin(), columns.end());
+  ContactSeries road;
+  road.heights.resize(columns.size());
+  for (const auto& row : readTable(in, source, header, false)) {
     road.t.push_back(row[0]);
-    road.left.push_back(row[1]);
-    road.right.push_back(row[2]);
+    for (std::size_t c = 0; c < columns.size(); ++c) road.heights[c].push_back(row[c + 1]);
   }
   return road;
 }
@@ -158,16 +162,7 @@ RoadSeries readRoadCsv(std::istream& in, const std::string& source) {
 ContactSeries readContactRoadCsvFile(const std::string& path,
                                      const std::vector<std::string>& columns) {
   std::ifstream in = openOrThrow(path);
-  std::vector<std::string> header{"t"};
-  header.insert(header.end(), columns.begin(), columns.end());
-  ContactSeries road;
-  road.heights.resize(columns.size());
-  for (const auto& row : readTable(in, path, header, false)) {
-    road.t.push_back(row[0]);
-    for (std::size_t c = 0; c < columns.size(); ++c) road.heights[c].push_back(row[c + 1]);
-  }
-  return road;
+  return readContactRoadCsv(in, path, columns);
 }
-
 
 }  // namespace pc_ekf

@@ -34,11 +34,9 @@ struct ContactSeries {
   std::vector<double> t;
   std::vector<std::vector<double>> heights;  // [contact][sample]
 };
+// `columns`: the model's road columns (ModelType::roadColumns()), after t.
+ContactSeries readContactRoadCsv(std::istream& in, const std::string& source,
+                                 const std::vector<std::string>& columns);
 ContactSeries readContactRoadCsvFile(const std::string& path, const std::vector<std::string>& columns);
-
-struct RoadSeries {
-  std::vector<double> t, left, right;
-};
-RoadSeries readRoadCsv(std::istream& in, const std::string& source);
 
 }  // namespace pc_ekf

@@ -1,9 +1,20 @@
+#include <stdexcept>
+
 #include "pc_ekf/io/model_type.h"
 
 namespace pc_ekf {
 
 ModelRegistry::ModelRegistry() {
-  for (auto t : {rollPlaneType(), fullCarType()}) builtin_[t->name()] = t;
+  add(rollPlaneType());
+  add(fullCarType());
+}
+
+void ModelRegistry::add(std::shared_ptr<const ModelType> type) {
+  if (!type) throw std::invalid_argument("ModelRegistry::add: no type");
+  const std::string name = type->name();
+  if (!builtin_.emplace(name, std::move(type)).second) {
+    throw std::invalid_argument("ModelRegistry: model type '" + name + "' registered twice");
+  }
 }
 
 const ModelRegistry& ModelRegistry::builtins() {

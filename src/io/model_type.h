@@ -1,9 +1,4 @@
-// What a mechanical model is to the configuration layer and the tools: its
-// parameter names and YAML reader (the `vehicle:` section), its contacts
-// (road inputs), its channels and suspensions (CSV columns, JointState
-// mapping), and how to build it on a road. The filters see only the
-// MechanicalModel it builds. Built-in types: roll_plane (the paper's bar),
-// full_car; others come from plugins (ModelRegistry::addResolver).
+// Model types (ModelType) and the registry that finds them by name.
 #pragma once
 
 #include <Eigen/Dense>
@@ -20,63 +15,76 @@ namespace pc_ekf {
 
 class YamlMapReader;
 
-// A model's fixed settings as read from YAML: the full parameter vector (in
-// parameterNames() order) plus whatever laws the type keeps (a subclass).
-struct ModelParameters {
-  virtual ~ModelParameters() = default;
-  Eigen::VectorXd values;
-};
-
-// One suspension: the JointState joint carrying its extension (position) and
-// rate (velocity).
-struct SuspensionJoint {
-  std::string default_joint;  // e.g. left_suspension
-  std::string config_key;     // key under node.joints, e.g. left
-  int position_channel = -1;  // index into channelNames()
-  int velocity_channel = -1;
-};
-
+// What a model is to the configuration layer, the tools and the ROS edge: its
+// description (the same object its MechanicalModel returns: names, tables,
+// channels, contacts, joints), how to read its `vehicle:` section (from the
+// tables), and how to build it on a road. Built-in types (roll_plane,
+// full_car) and plugins implement the same three virtuals and are found
+// through the same ModelRegistry.
 class ModelType {
  public:
   virtual ~ModelType() = default;
-  virtual std::string name() const = 0;
-  virtual const std::vector<std::string>& parameterNames() const = 0;
-  virtual const std::vector<std::string>& contactNames() const = 0;
-  // Road CSV columns after t (default: the contact names).
-  virtual std::vector<std::string> roadColumns() const { return contactNames(); }
-  virtual const std::vector<std::string>& channelNames() const = 0;
-  virtual const std::vector<SuspensionJoint>& suspensions() const = 0;
-
-  virtual std::shared_ptr<ModelParameters> defaults() const = 0;
-  // Reads the model's keys from `section` over a copy of `base` (absent keys
-  // keep base's values); bad values fail through section.fail (ConfigError).
-  virtual std::shared_ptr<ModelParameters> read(YamlMapReader& section,
-                                                const ModelParameters& base) const = 0;
+  virtual const ModelDescription& description() const = 0;
   // Throws std::invalid_argument when the road has the wrong contact count.
   virtual std::shared_ptr<const MechanicalModel> build(
       const ModelParameters& parameters, std::shared_ptr<const ContactRoad> road) const = 0;
   // The analytic speed bump under this model's contacts (road.speed_bump).
+  // Default: one contact takes the left track, two take left and right;
+  // other counts throw std::invalid_argument (override it).
   virtual std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
-                                                       const ModelParameters& parameters) const = 0;
+                                                       const ModelParameters& parameters) const;
+  // One line on the static equilibrium at the parameter vector `values`
+  // (simulate_vehicle); "" when the model has nothing to say.
+  virtual std::string equilibriumSummary(const ModelParameters&, const Eigen::VectorXd&) const {
+    return "";
+  }
+
+  const std::string& name() const { return description().name(); }
+  const std::vector<std::string>& parameterNames() const {
+    return description().parameters().names();
+  }
+  const std::vector<std::string>& contactNames() const { return description().contactNames(); }
+  // Road CSV columns after t.
+  const std::vector<std::string>& roadColumns() const { return description().roadColumns(); }
+  const std::vector<std::string>& channelNames() const { return description().channelNames(); }
+  const std::vector<SuspensionJoint>& suspensions() const { return description().suspensions(); }
   // The two-contact analytic roads (sine, course): only for two-contact models.
   bool twoContacts() const { return contactNames().size() == 2; }
+
+  // The tables' defaults.
+  std::shared_ptr<ModelParameters> defaults() const;
+  // Reads the description's parameters, settings and choices from `section`
+  // over a copy of `base` (absent keys keep base's values), each checked
+  // against its domain; bad values fail through section.fail (ConfigError).
+  std::shared_ptr<ModelParameters> read(YamlMapReader& section, const ModelParameters& base) const;
+};
+
+// A plugin's type in one line: Model derives from PointwiseModel, has
+// `static const ModelDescription& describe()` and a constructor
+// (const Eigen::VectorXd& nominal, std::shared_ptr<const ContactRoad> road).
+template <class Model>
+class PointwiseModelType : public ModelType {
+ public:
+  const ModelDescription& description() const override { return Model::describe(); }
+  std::shared_ptr<const MechanicalModel> build(
+      const ModelParameters& p, std::shared_ptr<const ContactRoad> road) const override {
+    return std::make_shared<Model>(p.values, std::move(road));
+  }
 };
 
 std::shared_ptr<const ModelType> rollPlaneType();
 std::shared_ptr<const ModelType> fullCarType();
 
-// The roll plane's settings as VehicleParameters and back (roll_plane only).
-struct VehicleParameters;
-VehicleParameters rollPlaneVehicle(const ModelParameters& p);
-std::shared_ptr<ModelParameters> rollPlaneParameters(const VehicleParameters& v);
-
-// Model types by name: the built-ins, then resolvers (e.g. a plugin loader)
-// for names it does not know. Immutable once built.
+// Model types by name: registered types (the built-ins are registered with
+// add() like any other), then resolvers (e.g. the pluginlib loader) for names
+// it does not know.
 class ModelRegistry {
  public:
   using Resolver = std::function<std::shared_ptr<const ModelType>(const std::string& name)>;
   ModelRegistry();  // the built-ins
   static const ModelRegistry& builtins();
+  // Throws std::invalid_argument when a type of that name is already registered.
+  void add(std::shared_ptr<const ModelType> type);
   void addResolver(Resolver r) { resolvers_.push_back(std::move(r)); }
   // nullptr when no type of that name is known; resolvers may throw
   // std::runtime_error naming why a plugin could not be loaded.

@@ -11,10 +11,8 @@ namespace pc_ekf {
 
 namespace {
 
-// Per-point constants in one Q x kCount table, one contiguous column per
-// quantity (structure of arrays), so derivatives() does no equilibrium or
-// parameter work and the transposed loop over the points can vectorise.
-struct PointConstants {
+// Per-point constants, one column per quantity (PointConstantTable).
+struct PointConstants : PointConstantTable {
   enum Column {
     kX = 0,  // corner position relative to O, 4 each
     kY = 4,
@@ -28,11 +26,7 @@ struct PointConstants {
     kInvBodyMass = 33,  // M_b^-1, row-major 3 x 3
     kCount = 42
   };
-  Eigen::ArrayXXd table;
-  explicit PointConstants(Eigen::Index q) : table(q, kCount) {}
-  double& operator()(Eigen::Index q, int column) { return table(q, column); }
-  Eigen::Index size() const { return table.rows(); }
-  const double* column(int c) const { return table.col(c).data(); }
+  explicit PointConstants(Eigen::Index q) : PointConstantTable(q, kCount) {}
 };
 
 // Raw column pointers (loop-invariant in the vectorised loop).
@@ -72,11 +66,9 @@ __attribute__((always_inline)) inline void pointDerivatives(const ConstantPointe
     const double x = c.x[i][q], y = c.y[i][q];
     const double u = at(0) + x * at(1) + y * at(2) - at(3 + i);
     const double v = at(7) + x * at(8) + y * at(9) - at(10 + i);
-    const double damper =
-        law == DamperLaw::kTanh ? c.damping[i][q] * fastTanh(tanh_rate * v) : c.damping[i][q] * v;
-    // F_K(delta) - F_K(delta - u), expanded so that it is exactly 0 at u = 0.
+    const double damper = damperForce<law>(c.damping[i][q], tanh_rate, v);
     const double spring =
-        u * (c.k[i][q] + c.k3[i][q] * (c.three_delta_sq[i][q] - c.three_delta[i][q] * u + u * u));
+        springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q], c.three_delta_sq[i][q]);
     f[i] = -spring - damper;
     gen[0] += f[i];
     gen[1] += f[i] * x;
@@ -231,31 +223,8 @@ FullCarModel::FullCarModel(const FullCarParameters& nominal,
   }
 }
 
-const std::vector<std::string>& FullCarModel::stateNames() const {
-  static const std::vector<std::string> names = {
-      "z",    "theta",    "phi",    "zu_fl",    "zu_fr",    "zu_rl",    "zu_rr",
-      "zdot", "thetadot", "phidot", "zudot_fl", "zudot_fr", "zudot_rl", "zudot_rr"};
-  return names;
-}
-
-const std::vector<std::string>& FullCarModel::parameterNames() const {
-  return fullCarParameterNames();
-}
-
-const std::vector<std::string>& FullCarModel::channelNames() const {
-  static const std::vector<std::string> names = {"u_fl", "u_fr", "u_rl", "u_rr",
-                                                 "v_fl", "v_fr", "v_rl", "v_rr"};
-  return names;
-}
-
-const std::vector<std::string>& FullCarModel::contactNames() {
-  static const std::vector<std::string> names = {"front_left", "front_right", "rear_left",
-                                                 "rear_right"};
-  return names;
-}
-
 std::string FullCarModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
-  const std::string why = fullCarParameterRuleViolation(params);
+  const std::string why = description().parameters().violation(params);
   if (!why.empty()) return why;
   try {
     solveFullCarEquilibrium(FullCarParameters::fromVector(params, nominal_));
@@ -274,7 +243,7 @@ std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params)
   PointConstants points(params.cols());
   for (Eigen::Index q = 0; q < params.cols(); ++q) {
     const std::string prefix = "FullCarModel::prepare: column " + std::to_string(q) + ": ";
-    const std::string why = fullCarParameterRuleViolation(params.col(q));
+    const std::string why = description().parameters().violation(params.col(q));
     if (!why.empty()) throw std::invalid_argument(prefix + why);
     const FullCarParameters p = FullCarParameters::fromVector(params.col(q), nominal_);
     FullCarEquilibrium e;

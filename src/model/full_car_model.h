@@ -23,37 +23,38 @@
 
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/model/road_input.h"
-#include "pc_ekf/model/roll_plane_model.h"  // DamperLaw
+#include "pc_ekf/model/suspension_laws.h"
 
 namespace pc_ekf {
 
-// Parameter vector, in order (fullCarParameterNames()):
-//   body_mass, roll_inertia, pitch_inertia, front_axle_distance,
-//   rear_axle_distance, track_width, unsprung_mass_front, unsprung_mass_rear,
-//   spring_linear_front, spring_linear_rear, spring_cubic_front,
-//   spring_cubic_rear, damping_front, damping_rear, tyre_stiffness, gravity,
-//   added_mass, added_mass_x, added_mass_y
-// Unsprung masses, springs and dampers are per wheel/corner.
+// The description of model.type full_car: parameter table, settings,
+// channels u_fl .. v_rr, contacts front_left .. rear_right, joints.
+const ModelDescription& fullCarDescription();
+
+// A typed copy of one full-car parameter vector plus the laws. Fields and
+// defaults come from fullCarDescription() (a default FullCarParameters holds
+// the table's defaults). Unsprung masses, springs and dampers are per axle.
 struct FullCarParameters {
-  double body_mass = 1200.0;                      // m_s, kg
-  double roll_inertia = 400.0;                    // I_xx about O, kg m^2
-  double pitch_inertia = 1600.0;                  // I_yy about O, kg m^2
-  double front_axle_distance = 1.1;               // a, O to the front axle, m
-  double rear_axle_distance = 1.5;                // b, O to the rear axle, m
-  double track_width = 1.5;                       // w, m
-  double unsprung_mass[2] = {40.0, 35.0};         // front, rear
-  double spring_linear[2] = {20000.0, 22000.0};   // N/m
-  double spring_cubic[2] = {100000.0, 100000.0};  // N/m^3
-  double damping[2] = {1500.0, 1400.0};           // N s/m
-  double tyre_stiffness = 200000.0;               // N/m, all four
-  double gravity = 9.81;
-  double added_mass = 200.0;   // M, kg
-  double added_mass_x = 1.3;   // forward of the rear axle, m
-  double added_mass_y = 0.75;  // left of the right wheels' line, m
+  FullCarParameters();
+  double body_mass{};            // m_s, kg
+  double roll_inertia{};         // I_xx about O, kg m^2
+  double pitch_inertia{};        // I_yy about O, kg m^2
+  double front_axle_distance{};  // a, O to the front axle, m
+  double rear_axle_distance{};   // b, O to the rear axle, m
+  double track_width{};          // w, m
+  double unsprung_mass[2]{};     // front, rear
+  double spring_linear[2]{};     // N/m
+  double spring_cubic[2]{};      // N/m^3
+  double damping[2]{};           // N s/m
+  double tyre_stiffness{};       // N/m, all four
+  double gravity{};
+  double added_mass{};    // M, kg
+  double added_mass_x{};  // forward of the rear axle, m
+  double added_mass_y{};  // left of the right wheels' line, m
   // Not in the vector: F_C = c * scale * tanh(rate * v), or F_C = c v.
   DamperLaw damper = DamperLaw::kTanh;
-  double damper_tanh_scale = 1.0;  // m/s
-  double damper_tanh_rate = 1.0;   // s/m
+  double damper_tanh_scale{};  // m/s
+  double damper_tanh_rate{};   // s/m
 
   double wheelbase() const { return front_axle_distance + rear_axle_distance; }
   // Position of M relative to O.
@@ -69,14 +70,15 @@ struct FullCarParameters {
   // Damper law and tanh constants come from `laws`.
   static FullCarParameters fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                       const FullCarParameters& laws);
+  static FullCarParameters from(const ModelParameters& m);
+  ModelParameters toModelParameters() const;
 };
 
 const std::vector<std::string>& fullCarParameterNames();
 
-// "" when admissible by the parameter rules alone (finite, positive masses,
-// inertias, lengths, stiffnesses and gravity; damping and cubic stiffness >= 0;
-// M >= 0; 0 <= added_mass_x <= a + b; 0 <= added_mass_y <= w), else why not.
-// FullCarModel::invalidReason also requires the equilibrium to converge.
+// fullCarDescription().parameters().names() and .violation(): "" when
+// admissible by the table's domains alone; FullCarModel::invalidReason also
+// requires the equilibrium to converge.
 std::string fullCarParameterRuleViolation(const Eigen::Ref<const Eigen::VectorXd>& params);
 
 // Static equilibrium, heights from the unloaded geometry (springs at free
@@ -99,17 +101,13 @@ class FullCarModel : public MechanicalModel {
   // std::invalid_argument.
   FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road);
 
-  int stateSize() const override { return 14; }
-  const std::vector<std::string>& stateNames() const override;
-  const std::vector<std::string>& parameterNames() const override;
+  const ModelDescription& description() const override { return fullCarDescription(); }
   const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
   std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const override;
-  const std::vector<std::string>& channelNames() const override;
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
   std::vector<double> breakpoints(double t0, double t1) const override;
 
-  static const std::vector<std::string>& contactNames();
   const FullCarParameters& nominal() const { return nominal_; }
   const ContactRoad& road() const { return *road_; }
   const ContactRoad* contactRoad() const override { return road_.get(); }

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/model/model_description.h"
+
 namespace pc_ekf {
 
 class ContactRoad;
@@ -39,18 +41,28 @@ class MechanicalModel {
  public:
   virtual ~MechanicalModel() = default;
 
-  virtual int stateSize() const = 0;
-  virtual const std::vector<std::string>& stateNames() const = 0;
+  // Names, tables, channels and contacts: the model's one description (the
+  // same object its ModelType returns).
+  virtual const ModelDescription& description() const = 0;
 
-  // Full parameter vector (every physical constant of the model).
-  virtual const std::vector<std::string>& parameterNames() const = 0;
+  int stateSize() const { return static_cast<int>(description().stateNames().size()); }
+  const std::vector<std::string>& stateNames() const { return description().stateNames(); }
+
+  // Full parameter vector (every physical constant of the model), in the
+  // order of description().parameters().
+  const std::vector<std::string>& parameterNames() const {
+    return description().parameters().names();
+  }
   virtual const Eigen::VectorXd& nominalParameters() const = 0;
   // "" when the parameter vector is physically admissible, else why not
-  // (e.g. "added_mass_position = 1.7 outside [0, 1.524]").
-  virtual std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const = 0;
+  // (e.g. "added_mass_position = 1.7 outside [0, 1.524]"). Default: the
+  // parameter table's domains; a model with rules across entries adds them.
+  virtual std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
+    return description().parameters().violation(params);
+  }
 
   // Measurement channels and the linear observation z = H y (channels x states).
-  virtual const std::vector<std::string>& channelNames() const = 0;
+  const std::vector<std::string>& channelNames() const { return description().channelNames(); }
   virtual const Eigen::MatrixXd& observationMatrix() const = 0;
 
   // params: parameterNames().size() x Q. Columns must be admissible.

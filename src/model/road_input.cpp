@@ -143,15 +143,6 @@ SampledRoad::SampledRoad(int contacts) : heights_(contacts) {
   if (contacts < 1) throw std::invalid_argument("SampledRoad: at least one contact");
 }
 
-SampledRoad::SampledRoad(std::vector<double> t, std::vector<double> left,
-                         std::vector<double> right)
-    : heights_(2) {
-  if (t.size() != left.size() || t.size() != right.size()) {
-    throw std::invalid_argument("SampledRoad: time and value series differ in length");
-  }
-  for (std::size_t i = 0; i < t.size(); ++i) append(t[i], left[i], right[i]);
-}
-
 SampledRoad::SampledRoad(const std::vector<double>& t,
                          const std::vector<std::vector<double>>& heights)
     : heights_(heights.size()) {
@@ -167,8 +158,6 @@ SampledRoad::SampledRoad(const std::vector<double>& t,
     append(t[k], row);
   }
 }
-
-void SampledRoad::append(double t, double left, double right) { append(t, {left, right}); }
 
 void SampledRoad::append(double t, const std::vector<double>& heights) {
   if (!std::isfinite(t)) throw std::invalid_argument(describeTime("non-finite time", t));
@@ -225,14 +214,6 @@ void SampledRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) const {
   for (std::size_t c = 0; c < n; ++c) {
     out[c] = heights_[c][i] + w * (heights_[c][i + 1] - heights_[c][i]);
   }
-}
-
-Eigen::Vector2d SampledRoad::height(double t) const {
-  if (heights_.size() != 2) throw std::logic_error("SampledRoad::height on a road of " +
-                                                   std::to_string(heights_.size()) + " contacts");
-  Eigen::Vector2d out;
-  heights(t, out);
-  return out;
 }
 
 std::vector<double> SampledRoad::breakpoints(double t0, double t1) const {

@@ -96,18 +96,16 @@ class CourseRoad : public RoadInput {
   std::vector<double> start_;  // one per segment, then the course's end
 };
 
-// A sampled series under any number of contacts (2 unless said), linearly
+// A sampled series under any number of contacts, linearly
 // interpolated and held constant outside its span. Samples can be appended
 // (road from a topic); times must increase strictly.
 class SampledRoad : public ContactRoad {
  public:
-  explicit SampledRoad(int contacts = 2);
-  SampledRoad(std::vector<double> t, std::vector<double> left, std::vector<double> right);
+  explicit SampledRoad(int contacts);
   // heights[c][k]: contact c at t[k]. Throws std::invalid_argument.
   SampledRoad(const std::vector<double>& t, const std::vector<std::vector<double>>& heights);
   // Throws std::invalid_argument when t is not strictly after the last sample,
-  // values are not finite or (heights) their count is not contactCount().
-  void append(double t, double left, double right);
+  // values are not finite or their count is not contactCount().
   void append(double t, const std::vector<double>& heights);
   // Index of the first sample that interpolation at times >= t needs: the one
   // at or before t (0 when t precedes every sample).
@@ -120,12 +118,8 @@ class SampledRoad : public ContactRoad {
   double lastTime() const;
   const std::vector<double>& times() const { return t_; }
   const std::vector<double>& column(int contact) const { return heights_[contact]; }
-  const std::vector<double>& leftHeights() const { return heights_[0]; }
-  const std::vector<double>& rightHeights() const { return heights_[1]; }
   int contactCount() const override { return static_cast<int>(heights_.size()); }
   void heights(double t, Eigen::Ref<Eigen::VectorXd> out) const override;
-  // Two-contact roads: (left, right).
-  Eigen::Vector2d height(double t) const;
   std::vector<double> breakpoints(double t0, double t1) const override;
  private:
   std::vector<double> t_;

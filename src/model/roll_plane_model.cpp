@@ -31,19 +31,15 @@ struct ConstantPointers {
 };
 
 // The constants in one Q x kCount table (one allocation per prepare()).
-struct PointConstants {
+struct PointConstants : PointConstantTable {
   enum Column {
     kK = 0, kK3 = 2, kThreeDelta = 4, kThreeDeltaSq = 6, kDamping = 8, kTyre = 10,
     kInvUnsprung = 12, kInvTotalMass = 14, kRollGain, kCg, kRearArm, kCgRatio, kInvLength,
     kRollStatic, kCosStatic, kSinStatic, kCount
   };
-  Eigen::ArrayXXd table;
-
-  explicit PointConstants(Eigen::Index q) : table(q, kCount) {}
-  double& operator()(Eigen::Index q, int column) { return table(q, column); }
-  Eigen::Index size() const { return table.rows(); }
+  explicit PointConstants(Eigen::Index q) : PointConstantTable(q, kCount) {}
   ConstantPointers pointers() const {
-    const auto col = [this](int c) { return table.col(c).data(); };
+    const auto col = [this](int c) { return column(c); };
     ConstantPointers p;
     for (int i = 0; i < 2; ++i) {
       p.k[i] = col(kK + i);
@@ -67,12 +63,6 @@ struct PointConstants {
   }
 };
 
-// F_K(delta) - F_K(delta - u) expanded so that it is exactly 0 at u = 0 (docs/method.md §1.4).
-inline double springIncrement(double u, double k, double k3, double three_delta,
-                              double three_delta_sq) {
-  return u * (k + k3 * (three_delta_sq - three_delta * u + u * u));
-}
-
 // Paper eq. 40-41 solved for the body-end accelerations, and eq. 42-43. `lever`
 // is cos(theta_s + theta). Shared by the per-point and the vectorised loops so
 // both give the same bits.
@@ -91,11 +81,6 @@ inline Accelerations accelerations(const ConstantPointers& c, Eigen::Index q, co
   a.wheel[0] = (c.tyre[0][q] * (road0 - xr1) - f[0]) * c.inv_unsprung[0][q];
   a.wheel[1] = (c.tyre[1][q] * (road1 - xr2) - f[1]) * c.inv_unsprung[1][q];
   return a;
-}
-
-template <DamperLaw law>
-inline double damperForce(double damping, double tanh_rate, double v) {
-  return law == DamperLaw::kTanh ? damping * fastTanh(tanh_rate * v) : damping * v;
 }
 
 // One point, state s[8] -> d[8] (any strides); cos by cosOfSum (library beyond the series).
@@ -293,73 +278,58 @@ RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
   }
 }
 
-const std::vector<std::string>& RollPlaneModel::stateNames() const {
-  static const std::vector<std::string> names = {"x1",    "x2",    "xr1",    "xr2",
-                                                 "x1dot", "x2dot", "xr1dot", "xr2dot"};
-  return names;
-}
-
-const std::vector<std::string>& RollPlaneModel::parameterNames() const {
-  return vehicleParameterNames();
-}
-
-const std::vector<std::string>& RollPlaneModel::channelNames() const {
-  static const std::vector<std::string> names = {"u1", "u2", "v1", "v2"};
-  return names;
-}
-
 namespace {
 
-// True when every check of RollPlaneModel::invalidReason passes, evaluated
-// without a branch per entry (it runs for every collocation point twice per
-// forecast). Conservative: false sends the caller to the detailed checks. With
-// a non-negative added mass the combined inertia is >= bar_inertia > 0, and
-// magnitudes below 1e150 keep its formula free of overflow.
-bool plainlyAdmissible(const double* p) {
-  double probe = 0.0, largest = 0.0;
-  for (int i = 0; i < 16; ++i) {
-    probe += p[i] * 0.0;  // NaN for NaN or +-Inf
-    largest = std::max(largest, std::abs(p[i]));
+// The model's rule across entries, beyond the table's domains: a point's
+// added mass may be negative while the total mass and the inertia about the
+// combined centre stay positive. Magnitudes below 1e150 keep the inertia
+// formula free of overflow (else the detailed check decides).
+struct AddedMassRule {
+  int bar_mass, bar_length, bar_inertia, added_mass, position;
+  // Each field's index in the table, found by writing 1..n into a copy
+  // (no second name list).
+  AddedMassRule() {
+    const int n = rollPlaneDescription().parameters().size();
+    const VehicleParameters mark =
+        VehicleParameters::fromVector(Eigen::VectorXd::LinSpaced(n, 1.0, n), VehicleParameters());
+    bar_mass = static_cast<int>(mark.bar_mass) - 1;
+    bar_length = static_cast<int>(mark.bar_length) - 1;
+    bar_inertia = static_cast<int>(mark.bar_inertia) - 1;
+    added_mass = static_cast<int>(mark.added_mass) - 1;
+    position = static_cast<int>(mark.added_mass_position) - 1;
   }
-  bool ok = std::isfinite(probe) & (largest < 1e150);
-  for (int i : {0, 1, 2, 5, 6, 9, 10, 11, 12, 13}) ok &= p[i] > 0.0;
-  for (int i : {3, 4, 7, 8}) ok &= p[i] >= 0.0;
-  ok &= (p[14] >= 0.0) & (p[14] + p[0] > 0.0) & (p[15] >= 0.0) & (p[15] <= p[9]);
-  return ok;
+};
+
+const AddedMassRule& rule() {
+  static const AddedMassRule r;
+  return r;
 }
 
 }  // namespace
 
 std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
-  if (params.size() == 16 && plainlyAdmissible(params.data())) return "";
-  const auto& names = vehicleParameterNames();
-  if (params.size() != static_cast<Eigen::Index>(names.size())) {
-    return "expected " + std::to_string(names.size()) + " parameters, got " +
-           std::to_string(params.size());
+  const ParameterTable& table = description().parameters();
+  const AddedMassRule& r = rule();
+  if (params.size() == table.size() && table.admissible(params.data())) {
+    const double largest = params.cwiseAbs().maxCoeff();
+    if ((params[r.added_mass] >= 0.0) & (largest < 1e150)) return "";
   }
-  for (Eigen::Index i = 0; i < params.size(); ++i) {
-    if (!std::isfinite(params[i])) return outOfDomain(names[i], params[i], "is not finite");
-  }
-  // Strictly positive: masses, linear stiffnesses, length, inertia, gravity.
-  for (int i : {0, 1, 2, 5, 6, 9, 10, 11, 12, 13}) {
-    if (params[i] <= 0.0) return outOfDomain(names[i], params[i], "must be > 0");
-  }
-  for (int i : {3, 4, 7, 8}) {  // damping, cubic stiffness
-    if (params[i] < 0.0) return outOfDomain(names[i], params[i], "must be >= 0");
-  }
-  const double m = params[0], length = params[9], mass = params[14], pos = params[15];
+  const std::string why = table.violation(params);
+  if (!why.empty()) return why;
+  const auto& names = table.names();
+  const double m = params[r.bar_mass], length = params[r.bar_length], mass = params[r.added_mass],
+               pos = params[r.position];
   if (mass + m <= 0.0) {
-    return outOfDomain(names[14], mass, "makes the total mass <= 0 (bar_mass = " + domainNumber(m) + ")");
-  }
-  if (pos < 0.0 || pos > length) {
-    return outOfDomain(names[15], pos, "outside [0, " + domainNumber(length) + "]");
+    return outOfDomain(names[r.added_mass], mass,
+                       "makes the total mass <= 0 (bar_mass = " + domainNumber(m) + ")");
   }
   // A negative added mass can still make the combined inertia non-positive.
   const double cg = (mass * pos + m * 0.5 * length) / (mass + m);
-  const double inertia =
-      params[10] + m * (0.5 * length - cg) * (0.5 * length - cg) + mass * (cg - pos) * (cg - pos);
+  const double inertia = params[r.bar_inertia] + m * (0.5 * length - cg) * (0.5 * length - cg) +
+                         mass * (cg - pos) * (cg - pos);
   if (!(inertia > 0.0)) {
-    return outOfDomain(names[14], mass, "makes the inertia about the combined centre <= 0");
+    return outOfDomain(names[r.added_mass], mass,
+                       "makes the inertia about the combined centre <= 0");
   }
   return "";
 }

@@ -9,38 +9,41 @@
 
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/model/road_input.h"
+#include "pc_ekf/model/suspension_laws.h"
 
 namespace pc_ekf {
 
-enum class DamperLaw { kTanh, kLinear };
+// The description of model.type roll_plane: parameter table (names, units,
+// defaults, domains), settings, channels u1 u2 v1 v2, contacts, joints.
+const ModelDescription& rollPlaneDescription();
 
-// Names of the full parameter vector, in order (docs/method.md §1.1).
-//   bar_mass, unsprung_mass_left, unsprung_mass_right, damping_left, damping_right,
-//   spring_linear_left, spring_linear_right, spring_cubic_left, spring_cubic_right,
-//   bar_length, bar_inertia, tyre_stiffness_left, tyre_stiffness_right, gravity,
-//   added_mass, added_mass_position
+// A typed copy of one roll-plane parameter vector plus the laws, for the
+// static equilibrium and for tests. Field order and defaults come from
+// rollPlaneDescription(): a default VehicleParameters holds the table's
+// defaults.
 struct VehicleParameters {
-  double bar_mass = 580.0;
-  double unsprung_mass[2] = {36.26, 36.26};
-  double damping[2] = {710.70, 710.70};
-  double spring_linear[2] = {19357.2, 19357.2};
-  double spring_cubic[2] = {100000.0, 100000.0};
-  double bar_length = 1.524;
-  double bar_inertia = 63.3316;
-  double tyre_stiffness[2] = {96319.76, 96319.76};
-  double gravity = 9.81;
-  double added_mass = 200.0;
-  double added_mass_position = 0.762;
+  VehicleParameters();
+  double bar_mass{};
+  double unsprung_mass[2]{};
+  double damping[2]{};
+  double spring_linear[2]{};
+  double spring_cubic[2]{};
+  double bar_length{};
+  double bar_inertia{};
+  double tyre_stiffness[2]{};
+  double gravity{};
+  double added_mass{};
+  double added_mass_position{};
   DamperLaw damper = DamperLaw::kTanh;
-  double damper_tanh_scale = 0.2;  // F_C = c * scale * tanh(rate * v)
-  double damper_tanh_rate = 10.0;
+  double damper_tanh_scale{};  // F_C = c * scale * tanh(rate * v)
+  double damper_tanh_rate{};
 
   Eigen::VectorXd toVector() const;
   static VehicleParameters fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                       const VehicleParameters& laws);
+  static VehicleParameters from(const ModelParameters& m);
+  ModelParameters toModelParameters() const;
 };
-
-const std::vector<std::string>& vehicleParameterNames();
 
 // Static equilibrium of docs/method.md §1.3 for one parameter vector.
 struct StaticEquilibrium {
@@ -61,12 +64,9 @@ class RollPlaneModel : public MechanicalModel {
   // road: two contacts (left, right), else std::invalid_argument.
   RollPlaneModel(const VehicleParameters& nominal, std::shared_ptr<const ContactRoad> road);
 
-  int stateSize() const override { return 8; }
-  const std::vector<std::string>& stateNames() const override;
-  const std::vector<std::string>& parameterNames() const override;
+  const ModelDescription& description() const override { return rollPlaneDescription(); }
   const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
   std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const override;
-  const std::vector<std::string>& channelNames() const override;
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
   std::vector<double> breakpoints(double t0, double t1) const override;

@@ -35,25 +35,18 @@ class ScalarGrowthBatch : public ModelBatch {
 ScalarGrowthModel::ScalarGrowthModel(double a, double y0)
     : nominal_(Eigen::Vector2d(a, y0)), h_(Eigen::MatrixXd::Ones(1, 1)) {}
 
-const std::vector<std::string>& ScalarGrowthModel::stateNames() const {
-  static const std::vector<std::string> names = {"y"};
-  return names;
-}
-
-const std::vector<std::string>& ScalarGrowthModel::parameterNames() const {
-  static const std::vector<std::string> names = {"growth_rate", "initial_value"};
-  return names;
-}
-
-const std::vector<std::string>& ScalarGrowthModel::channelNames() const { return stateNames(); }
-
-std::string ScalarGrowthModel::invalidReason(
-    const Eigen::Ref<const Eigen::VectorXd>& params) const {
-  if (params.size() != 2) return "expected 2 parameters, got " + std::to_string(params.size());
-  for (int i = 0; i < 2; ++i) {
-    if (!std::isfinite(params[i])) return parameterNames()[i] + " is not finite";
-  }
-  return "";
+const ModelDescription& ScalarGrowthModel::description() const {
+  static const ModelDescription d({"scalar_growth",
+                                   "y' = a y, y(0) = y0 (a test model)",
+                                   ParameterTable({{"growth_rate", "1/s", 1.0, anyValue(), "a"},
+                                                   {"initial_value", "", 1.0, anyValue(), "y0"}}),
+                                   {},
+                                   {},
+                                   {"y"},
+                                   {{"y", "", "the state"}},
+                                   {},
+                                   {}});
+  return d;
 }
 
 std::unique_ptr<ModelBatch> ScalarGrowthModel::prepare(const Eigen::MatrixXd& params) const {

@@ -10,12 +10,8 @@ namespace pc_ekf {
 class ScalarGrowthModel : public MechanicalModel {
  public:
   ScalarGrowthModel(double a, double y0);
-  int stateSize() const override { return 1; }
-  const std::vector<std::string>& stateNames() const override;
-  const std::vector<std::string>& parameterNames() const override;
+  const ModelDescription& description() const override;
   const Eigen::VectorXd& nominalParameters() const override { return nominal_; }
-  std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const override;
-  const std::vector<std::string>& channelNames() const override;
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
   std::vector<double> breakpoints(double, double) const override { return {}; }

@@ -171,9 +171,6 @@ void readTwoContactRoad(const std::string& path, BagRecord& record,
                      stampText(r.header.stamp) + " has a non-finite height");
     }
     const double t = secondsSince(r.header.stamp, record.origin);
-    record.road.t.push_back(t);
-    record.road.left.push_back(r.left);
-    record.road.right.push_back(r.right);
     record.road_contacts.t.push_back(t);
     record.road_contacts.heights[0].push_back(r.left);
     record.road_contacts.heights[1].push_back(r.right);
@@ -339,18 +336,16 @@ BagReadOptions bagReadOptions(const EstimatorConfig& config) {
 
 void writeBag(const std::string& path, const BagContents& c) {
   const bool contacts = !c.contacts.empty();
-  const std::vector<double>& road_t = contacts ? c.road_contacts.t : c.road.t;
-  if (!contacts && (c.road.left.size() != c.road.t.size() || c.road.right.size() != c.road.t.size())) {
-    throw BagError(path + ": road time and height series differ in length");
+  const std::vector<double>& road_t = c.road_contacts.t;
+  // Without contact names the road goes out as pc_ekf/RoadProfile (left, right).
+  const std::size_t columns = contacts ? c.contacts.size() : 2;
+  if (c.road_contacts.heights.size() != columns) {
+    throw BagError(path + ": " + std::to_string(c.road_contacts.heights.size()) +
+                   " road columns for " + std::to_string(columns) + " contacts");
   }
-  if (contacts) {
-    if (c.road_contacts.heights.size() != c.contacts.size()) {
-      throw BagError(path + ": " + std::to_string(c.road_contacts.heights.size()) +
-                     " road columns for " + std::to_string(c.contacts.size()) + " contacts");
-    }
-    for (const auto& h : c.road_contacts.heights) {
-      if (h.size() != road_t.size()) throw BagError(path + ": road time and height series differ in length");
-    }
+  for (const auto& h : c.road_contacts.heights) {
+    if (h.size() != road_t.size())
+      throw BagError(path + ": road time and height series differ in length");
   }
   try {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
@@ -378,7 +373,9 @@ void writeBag(const std::string& path, const BagContents& c) {
           for (std::size_t k = 0; k < row.size(); ++k) row[k] = c.road_contacts.heights[k][r];
           bag.write(c.road_heights_topic, stamp, roadHeightsMessage(stamp, c.contacts, row));
         } else {
-          bag.write(c.road_topic, stamp, roadProfileMessage(stamp, c.road.left[r], c.road.right[r]));
+          bag.write(c.road_topic, stamp,
+                    roadProfileMessage(stamp, c.road_contacts.heights[0][r],
+                                       c.road_contacts.heights[1][r]));
         }
         ++r;
       } else {

@@ -52,8 +52,9 @@ struct BagReadOptions {
 
 struct BagRecord {
   ros::Time origin;           // stamp of the first road message (t = 0)
-  RoadSeries road;            // two-contact road: t in s since origin, strictly increasing
-  ContactSeries road_contacts;  // the road under every contact (two-contact roads too)
+  // The road under every contact (road/profile: left, right), t in s since
+  // the origin, strictly increasing.
+  ContactSeries road_contacts;
   MeasurementSeries samples;  // t in s since origin, strictly increasing, non-empty
   std::optional<ParameterEstimate> ground_truth;  // the last one, when present
   std::string road_topic, joint_states_topic;     // the topics actually read
@@ -81,8 +82,8 @@ BagReadOptions bagReadOptions(const EstimatorConfig& config);
 // origin + t (header stamp = bag record time), and an optional ground truth.
 struct BagContents {
   ros::Time origin;
-  RoadSeries road;  // two-contact models (road/profile)
-  // Other models: the road under `contacts` (road/heights), used when contacts is not empty.
+  // The road under `contacts` (road/heights); with `contacts` empty, two
+  // columns (left, right) written as road/profile.
   ContactSeries road_contacts;
   std::vector<std::string> contacts;
   std::string road_heights_topic = kRoadHeightsTopic;

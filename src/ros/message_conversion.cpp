@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/germ.h"
 
 namespace pc_ekf {
@@ -179,15 +180,11 @@ sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ro
   return js;
 }
 
-std::vector<SuspensionJoints::Joint> SuspensionJoints::resolved() const {
-  if (!joints.empty()) return joints;
-  return {{left, kChannelU1, kChannelV1}, {right, kChannelU2, kChannelV2}};
-}
-
-int SuspensionJoints::channelCount() const { return joints.empty() ? 4 : channels; }
+SuspensionJoints::SuspensionJoints()
+    : SuspensionJoints(suspensionJoints(*rollPlaneType(), defaultJointNames(*rollPlaneType()))) {}
 
 SuspensionJoints suspensionJoints(const ModelType& type, const std::vector<std::string>& names) {
-  SuspensionJoints out;
+  SuspensionJoints out({}, 0);
   const auto& suspensions = type.suspensions();
   if (names.size() != suspensions.size()) {
     throw std::invalid_argument("suspensionJoints: " + std::to_string(names.size()) +
@@ -198,10 +195,6 @@ SuspensionJoints suspensionJoints(const ModelType& type, const std::vector<std::
     out.joints.push_back({names[k], suspensions[k].position_channel, suspensions[k].velocity_channel});
   }
   out.channels = static_cast<int>(type.channelNames().size());
-  if (type.name() == "roll_plane") {
-    out.left = names[0];
-    out.right = names[1];
-  }
   return out;
 }
 

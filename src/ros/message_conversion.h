@@ -41,27 +41,25 @@ ros::Time timeFromSeconds(double seconds);
 
 // ---- suspension measurements (sensor_msgs/JointState) ----
 
-// Joint names of the suspensions and the channels each carries; configurable.
-// Default: the roll plane's two (left, right); `joints` (e.g. from
-// suspensionJoints()) for any model.
+// Joint names of the suspensions and the channels each carries (from the
+// model's description, names configurable). Default: the default model
+// type's joints with their default names (the roll plane's left and right).
 struct SuspensionJoints {
-  std::string left = "left_suspension";    // tyre 1: position u1, velocity v1
-  std::string right = "right_suspension";  // tyre 2: position u2, velocity v2
   struct Joint {
     std::string name;
     int position = -1, velocity = -1;  // channel indices (-1: the field is not measured)
   };
-  std::vector<Joint> joints;  // empty: {left, right} above
-  int channels = 4;           // the model's channel count when `joints` is given
-  std::vector<Joint> resolved() const;
-  int channelCount() const;
+  SuspensionJoints();
+  SuspensionJoints(std::vector<Joint> joints, int channels)
+      : joints(std::move(joints)), channels(channels) {}
+  std::vector<Joint> joints;
+  int channels = 0;  // the model's channel count
+  const std::vector<Joint>& resolved() const { return joints; }
+  int channelCount() const { return channels; }
 };
 
 // The joints of a model type with the configured names (node.joint_names).
 SuspensionJoints suspensionJoints(const ModelType& type, const std::vector<std::string>& names);
-
-// Channel order of the model (RollPlaneModel::channelNames()): u1, u2, v1, v2.
-constexpr int kChannelU1 = 0, kChannelU2 = 1, kChannelV1 = 2, kChannelV2 = 3;
 
 // Why an element or array of a JointState was not used (node counters).
 enum class JointStateProblem { kArrayLength, kUnknownJoint, kDuplicateJoint, kNonFinite };

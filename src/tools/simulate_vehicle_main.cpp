@@ -10,33 +10,17 @@
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/ros/model_plugins.h"
-#include "pc_ekf/model/full_car_model.h"
 
 namespace {
 
 using pc_ekf::EstimatorConfig;
 
-// The static equilibrium of the built-in models (other models: the label only).
+// The model's own equilibrium line (models without one: the label only).
 void printEquilibrium(const EstimatorConfig& c, const char* label, const Eigen::VectorXd& params,
                       bool truth) {
-  using namespace pc_ekf;
-  if (c.rollPlane()) {
-    const VehicleParameters laws = truth && c.truth.vehicle ? *c.truth.vehicle : c.vehicle;
-    const VehicleParameters p = VehicleParameters::fromVector(params, laws);
-    const StaticEquilibrium e = solveStaticEquilibrium(p);
-    std::printf("%s: M = %.2f kg, d_CG = %.4f m -> theta_s = %.4f deg, h2 - h1 = %.5f m\n", label,
-                p.added_mass, p.added_mass_position, e.roll_angle * 180.0 / M_PI,
-                e.height[1] - e.height[0]);
-  } else if (c.model_type->name() == "full_car") {
-    const FullCarParameters p = FullCarParameters::fromVector(params, FullCarParameters());
-    const FullCarEquilibrium e = solveFullCarEquilibrium(p);
-    std::printf("%s: M = %.2f kg at x = %.4f m, y = %.4f m -> heave %.5f m, pitch %.4f deg "
-                "(> 0 front up), roll %.4f deg (> 0 left up)\n",
-                label, p.added_mass, p.added_mass_x, p.added_mass_y, e.heave,
-                e.pitch * 180.0 / M_PI, e.roll * 180.0 / M_PI);
-  } else {
-    std::printf("%s:\n", label);
-  }
+  const auto& laws = truth ? *c.truthModelParameters() : *c.modelParameters();
+  const std::string line = c.model_type->equilibriumSummary(laws, params);
+  std::printf("%s:%s%s\n", label, line.empty() ? "" : " ", line.c_str());
 }
 
 }  // namespace

@@ -84,11 +84,9 @@ int main(int argc, char** argv) {
       return args.badInput("--road-rate " + args["--road-rate"] + " gives " + std::to_string(count) +
                       " road messages over " + std::to_string(t_last) + " s; too many");
     }
-    if (config.model_type->twoContacts()) {
-      bag.road = sampleRoad(*road, t_last, road_rate);
-    } else {
+    bag.road_contacts = sampleContactRoad(*road, t_last, road_rate);
+    if (!config.model_type->twoContacts()) {
       bag.contacts = config.model_type->contactNames();
-      bag.road_contacts = sampleContactRoad(*road, t_last, road_rate);
       bag.joints = suspensionJoints(*config.model_type, config.node.joint_names);
     }
     bag.samples = samples;

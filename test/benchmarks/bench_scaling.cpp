@@ -14,7 +14,9 @@ namespace {
 EstimatorConfig scalingConfig(int n, int p) {
   EstimatorConfig c = paperConfig(100);
   const char* extra[] = {"spring_linear_left", "tyre_stiffness_left"};
-  const double nominal[] = {c.vehicle.spring_linear[0], c.vehicle.tyre_stiffness[0]};
+  const ParameterTable& table = c.model_type->description().parameters();
+  const double nominal[] = {c.model->values[table.at(extra[0])],
+                            c.model->values[table.at(extra[1])]};
   for (int i = 2; i < n; ++i) {
     UncertainParameter u = c.uncertain.front();
     u.name = extra[i - 2];

@@ -25,13 +25,14 @@ void check(bool ok) {
 }
 
 void checkRecord(const pc_ekf::BagRecord& r) {
-  check(!r.road.t.empty() && r.road.left.size() == r.road.t.size() &&
-        r.road.right.size() == r.road.t.size());
-  check(r.road.t.front() == 0.0);
-  for (std::size_t i = 0; i < r.road.t.size(); ++i) {
-    check(std::isfinite(r.road.t[i]) && std::isfinite(r.road.left[i]) &&
-          std::isfinite(r.road.right[i]));
-    if (i > 0) check(r.road.t[i] > r.road.t[i - 1]);
+  const pc_ekf::ContactSeries& road = r.road_contacts;
+  check(!road.t.empty() && road.heights.size() == 2 && road.heights[0].size() == road.t.size() &&
+        road.heights[1].size() == road.t.size());
+  check(road.t.front() == 0.0);
+  for (std::size_t i = 0; i < road.t.size(); ++i) {
+    check(std::isfinite(road.t[i]) && std::isfinite(road.heights[0][i]) &&
+          std::isfinite(road.heights[1][i]));
+    if (i > 0) check(road.t[i] > road.t[i - 1]);
   }
   check(!r.samples.empty());
   for (std::size_t i = 0; i < r.samples.size(); ++i) {

@@ -43,12 +43,12 @@ void checkMeasurements(const pc_ekf::MeasurementSeries& series) {
   }
 }
 
-void checkRoad(const pc_ekf::RoadSeries& road) {
-  check(!road.t.empty() && road.left.size() == road.t.size() &&
-        road.right.size() == road.t.size());
+void checkRoad(const pc_ekf::ContactSeries& road) {
+  check(!road.t.empty() && road.heights.size() == 2 && road.heights[0].size() == road.t.size() &&
+        road.heights[1].size() == road.t.size());
   for (std::size_t i = 0; i < road.t.size(); ++i) {
     check(std::isfinite(road.t[i]) && road.t[i] >= 0.0);
-    check(std::isfinite(road.left[i]) && std::isfinite(road.right[i]));
+    check(std::isfinite(road.heights[0][i]) && std::isfinite(road.heights[1][i]));
     if (i > 0) check(road.t[i] > road.t[i - 1]);
   }
 }
@@ -64,7 +64,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     std::istringstream in(bytes);
-    checkRoad(pc_ekf::readRoadCsv(in, "fuzz_road.csv"));
+    checkRoad(pc_ekf::readContactRoadCsv(in, "fuzz_road.csv", {"y1", "y2"}));
   } catch (const pc_ekf::CsvError&) {
   }
   return 0;

@@ -11,9 +11,16 @@
 namespace pc_ekf::test {
 namespace {
 
+// The road's height under its first contact at t.
+double firstHeight(const ContactRoad& road, double t) {
+  Eigen::VectorXd h(road.contactCount());
+  road.heights(t, h);
+  return h[0];
+}
+
 Measurement sample(double u1) {
   Measurement m;
-  m.channels = {kChannelU1};
+  m.channels = {0 /* u1 */};
   m.values = Eigen::VectorXd::Constant(1, u1);
   return m;
 }
@@ -68,7 +75,7 @@ TEST(EstimatorTimeline, TopicRoadSetsTheOriginAndSamplesWaitForIt) {
   ASSERT_EQ(ready.size(), 1u);
   EXPECT_EQ(ready[0].measurement.time, 0.02);
   EXPECT_FALSE(ready[0].road_held);
-  EXPECT_EQ(tl.road()->height(0.015)(0), 0.015);
+  EXPECT_EQ(firstHeight(*tl.road(), 0.015), 0.015);
   // Road stamps: duplicate, slightly back, far back, non-finite.
   EXPECT_EQ(tl.addRoad(ros::Time(100, 20000000), 0.0, 0.0, 1.5), StampVerdict::kDuplicate);
   EXPECT_EQ(tl.addRoad(ros::Time(100, 15000000), 0.0, 0.0, 1.5), StampVerdict::kOutOfOrder);
@@ -117,7 +124,7 @@ TEST(EstimatorTimeline, RoadBufferIsBoundedAndResetStartsOver) {
   ASSERT_EQ(tl.addRoad(ros::Time(100, 11000000), 11, 11, 0.0), StampVerdict::kAccepted);
   EXPECT_FALSE(tl.roadHistoryComplete());
   EXPECT_EQ(tl.roadCount(), 5u);  // 0.007 (kept for interpolation) .. 0.011
-  EXPECT_DOUBLE_EQ(tl.road()->height(0.0075)(0), 7.5);
+  EXPECT_DOUBLE_EQ(firstHeight(*tl.road(), 0.0075), 7.5);
   tl.reset();
   EXPECT_EQ(tl.mode(), RoadMode::kUndecided);
   EXPECT_FALSE(tl.origin());

@@ -52,7 +52,7 @@ TEST(EstimatorDegenerate, SingularInnovationCovarianceKeepsTheStateBeforeTheSamp
   const ParameterEstimate prior = run.priorEstimate(ros::Time(0, 0));
   Measurement m;
   m.time = 0.0;
-  m.channels = {kChannelU1, kChannelU2};
+  m.channels = {0 /* u1 */, 1 /* u2 */};
   m.values = Eigen::Vector2d(1e-6, -1e-6);  // noise on a vehicle at rest
   const SampleEstimate e = run.process(m, ros::Time(1, 0));
   EXPECT_TRUE(e.non_finite);

@@ -49,6 +49,17 @@ inline bool waitUntil(const std::function<bool()>& done, double timeout) {
   return done();
 }
 
+// The two tracks (left, right) of a roll-plane test road, as road/profile carries them.
+struct RoadSeries {
+  std::vector<double> t, left, right;
+};
+inline RoadSeries twoTracks(const ContactSeries& s) {
+  return RoadSeries{s.t, s.heights.at(0), s.heights.at(1)};
+}
+inline ContactSeries contactsOf(const RoadSeries& r) {
+  return ContactSeries{r.t, {r.left, r.right}};
+}
+
 // A measurement record and its road, times in s since the origin.
 struct Record {
   MeasurementSeries samples;
@@ -63,7 +74,8 @@ inline Record syntheticRecord(const EstimatorConfig& c, std::uint64_t seed,
   const auto model = makeModel(c, road);
   Record r;
   r.samples = synthesizeFromConfig(c, *model, seed);
-  r.road = sampleRoad(*road, r.samples.back().time, road_rate);
+  const ContactSeries s = sampleContactRoad(*road, r.samples.back().time, road_rate);
+  r.road = twoTracks(s);
   return r;
 }
 

@@ -33,10 +33,10 @@ struct CaseB {
   }
   ~CaseB() { std::filesystem::remove_all(dir); }
   Record asRecord(bool positions_only = false) const {
-    Record r{record.samples, record.road};
+    Record r{record.samples, twoTracks(record.road_contacts)};
     if (positions_only) {
       for (Measurement& m : r.samples) {  // u1, u2 only
-        m.channels = {kChannelU1, kChannelU2};
+        m.channels = {0 /* u1 */, 1 /* u2 */};
         m.values = m.values.head(2).eval();
       }
     }
@@ -107,9 +107,9 @@ TEST_F(EstimatorTopicRoad, SamplesWaitForLateRoadData) {
   input_.record(samples_only, data.record.origin, false);
   ros::WallDuration(0.3).sleep();
   EXPECT_EQ(estimates_.size(), 0u);  // nothing without road data
-  for (std::size_t i = 0; i < data.record.road.t.size(); ++i) {
-    input_.road(stampAt(data.record.origin, data.record.road.t[i]), data.record.road.left[i],
-                data.record.road.right[i]);
+  const RoadSeries road = twoTracks(data.record.road_contacts);
+  for (std::size_t i = 0; i < road.t.size(); ++i) {
+    input_.road(stampAt(data.record.origin, road.t[i]), road.left[i], road.right[i]);
   }
   ASSERT_TRUE(estimates_.waitForCount(100, 40.0));
   const auto late = estimates_.messages();

@@ -19,7 +19,7 @@ TEST(EstimatorTwoVehicles, IndependentEstimatesEqualToSingleVehicleRuns) {
                           std::to_string(::getpid()) + ".bag";
   BagContents contents;
   contents.origin = origin_a;
-  contents.road = a.road;
+  contents.road_contacts = contactsOf(a.road);
   contents.samples = a.samples;
   writeBag(bag, contents);
 

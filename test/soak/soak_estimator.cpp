@@ -85,7 +85,7 @@ int run(const Options& o) {
   TimelineSettings ts = timelineSettings(c);
   ts.analytic_interval = o.dt;
   EstimatorTimeline timeline(ts);
-  const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>()));
+  const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>(2)));
   const auto pdfs =
       std::make_shared<ParameterPdfSampler>(prior->basis(), c.pdf.draws, c.pdf.bins, c.pdf.seed);
   std::unique_ptr<EstimatorRun> run;

@@ -4,6 +4,8 @@
 // textbook Kalman filter on the augmented state [y; theta].
 #pragma once
 
+#include <memory>
+
 #include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf::testing {
@@ -12,18 +14,22 @@ class LinearForcedModel : public MechanicalModel {
  public:
   LinearForcedModel(Eigen::MatrixXd a, Eigen::MatrixXd b, Eigen::MatrixXd c, Eigen::VectorXd nominal)
       : a_(std::move(a)), b_(std::move(b)), c_(std::move(c)), nominal_(std::move(nominal)) {
-    for (int i = 0; i < a_.rows(); ++i) states_.push_back("y" + std::to_string(i));
-    for (int i = 0; i < b_.cols(); ++i) params_.push_back("theta" + std::to_string(i));
-    for (int i = 0; i < c_.rows(); ++i) channels_.push_back("z" + std::to_string(i));
+    ModelDescription::Parts d;
+    d.name = "linear_forced";
+    std::vector<ParameterSpec> params;
+    for (int i = 0; i < a_.rows(); ++i) d.states.push_back("y" + std::to_string(i));
+    for (int i = 0; i < b_.cols(); ++i) {
+      params.push_back({"theta" + std::to_string(i), "", nominal_[i], anyValue(), ""});
+    }
+    for (int i = 0; i < c_.rows(); ++i) d.channels.push_back({"z" + std::to_string(i), "", ""});
+    d.parameters = ParameterTable(std::move(params));
+    description_ = std::make_unique<ModelDescription>(std::move(d));
   }
-  int stateSize() const override { return static_cast<int>(a_.rows()); }
-  const std::vector<std::string>& stateNames() const override { return states_; }
-  const std::vector<std::string>& parameterNames() const override { return params_; }
+  const ModelDescription& description() const override { return *description_; }
   const Eigen::VectorXd& nominalParameters() const override { return nominal_; }
   std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& p) const override {
     return p.allFinite() ? "" : "non-finite parameter";
   }
-  const std::vector<std::string>& channelNames() const override { return channels_; }
   const Eigen::MatrixXd& observationMatrix() const override { return c_; }
   std::vector<double> breakpoints(double, double) const override { return {}; }
 
@@ -48,7 +54,7 @@ class LinearForcedModel : public MechanicalModel {
  private:
   Eigen::MatrixXd a_, b_, c_;
   Eigen::VectorXd nominal_;
-  std::vector<std::string> states_, params_, channels_;
+  std::unique_ptr<ModelDescription> description_;
 };
 
 }  // namespace pc_ekf::testing

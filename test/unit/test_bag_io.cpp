@@ -33,10 +33,11 @@ Measurement sample(double t, std::vector<int> channels, std::vector<double> valu
 BagContents smallBag() {
   BagContents c;
   c.origin = ros::Time(500, 0);
+  c.road_contacts.heights.resize(2);  // left, right (road/profile)
   for (int i = 0; i <= 10; ++i) {
-    c.road.t.push_back(0.1 * i);
-    c.road.left.push_back(0.01 * i);
-    c.road.right.push_back(-0.02 * i);
+    c.road_contacts.t.push_back(0.1 * i);
+    c.road_contacts.heights[0].push_back(0.01 * i);
+    c.road_contacts.heights[1].push_back(-0.02 * i);
   }
   c.samples = {sample(0.25, {0, 1, 2, 3}, {1, 2, 3, 4}), sample(0.5, {1, 2}, {5, 6}),
                sample(1.0, {3}, {7})};
@@ -87,14 +88,14 @@ TEST(BagRoundTrip, SynthesizedBagGivesTheCsvSamplesAndTheAnalyticRoad) {
   EXPECT_LE((rec.samples.back().values - direct.back().values).cwiseAbs().maxCoeff(), 1e-12);
 
   // Road: 1 kHz from 0 to the last sample (3 s), the analytic bump's values.
-  ASSERT_EQ(rec.road.t.size(), 3001u);
+  ASSERT_EQ(rec.road_contacts.t.size(), 3001u);
   double peak = 0.0;
-  for (std::size_t i = 0; i < rec.road.t.size(); ++i) {
-    ASSERT_NEAR(rec.road.t[i], i / 1000.0, 1e-12);
-    const Eigen::Vector2d y = road->height(rec.road.t[i]);
-    ASSERT_NEAR(rec.road.left[i], y(0), 1e-12) << i;
-    ASSERT_NEAR(rec.road.right[i], y(1), 1e-12) << i;
-    peak = std::max(peak, rec.road.left[i]);
+  for (std::size_t i = 0; i < rec.road_contacts.t.size(); ++i) {
+    ASSERT_NEAR(rec.road_contacts.t[i], i / 1000.0, 1e-12);
+    const Eigen::Vector2d y = road->height(rec.road_contacts.t[i]);
+    ASSERT_NEAR(rec.road_contacts.heights[0][i], y(0), 1e-12) << i;
+    ASSERT_NEAR(rec.road_contacts.heights[1][i], y(1), 1e-12) << i;
+    peak = std::max(peak, rec.road_contacts.heights[0][i]);
   }
   EXPECT_NEAR(peak, 0.10, 1e-12);
 
@@ -149,7 +150,7 @@ TEST(BagRoundTrip, BagWithAnOlderParameterEstimateStillReads) {
   const std::string bag = std::string(PC_EKF_SOURCE_DIR) + "/test/unit/data/speed_bump_n10_v0.bag";
   const BagRecord r = readBag(bag);
   EXPECT_EQ(r.samples.size(), 10u);
-  EXPECT_EQ(r.road.t.size(), 61u);
+  EXPECT_EQ(r.road_contacts.t.size(), 61u);
   EXPECT_FALSE(r.ground_truth.has_value());
   bool warned = false;
   for (const auto& w : r.warnings) warned = warned || w.find("ground truth not read") != std::string::npos;
@@ -173,11 +174,11 @@ TEST(BagRoundTrip, StartTimeAndRoadRateOptions) {
   ASSERT_EQ(r.status, 0) << r.err;
   const BagRecord rec = readBag(bag);
   EXPECT_EQ(rec.origin, ros::Time(1234, 500000000));
-  ASSERT_EQ(rec.road.t.size(), 601u);
-  EXPECT_NEAR(rec.road.t.back(), 3.0, 1e-12);
+  ASSERT_EQ(rec.road_contacts.t.size(), 601u);
+  EXPECT_NEAR(rec.road_contacts.t.back(), 3.0, 1e-12);
   // y1 = 0.05 sin(2 pi t), y2 = -y1 at t = 0.25 s (road sample 50).
-  EXPECT_NEAR(rec.road.left[50], 0.05, 1e-12);
-  EXPECT_NEAR(rec.road.right[50], -0.05, 1e-12);
+  EXPECT_NEAR(rec.road_contacts.heights[0][50], 0.05, 1e-12);
+  EXPECT_NEAR(rec.road_contacts.heights[1][50], -0.05, 1e-12);
   EXPECT_NEAR(rec.samples.front().time, 0.3, 1e-12);
 }
 
@@ -199,7 +200,7 @@ TEST(BagRoundTrip, WrittenSubsetsNamespacesAndEqualStampsMerge) {
   EXPECT_EQ(rec.samples[2].time, 1.0);
   EXPECT_EQ(rec.samples[2].channels, (std::vector<int>{0, 3}));
   EXPECT_EQ(rec.samples[2].values, Eigen::Vector2d(8, 7));
-  EXPECT_EQ(rec.road.right[10], -0.2);
+  EXPECT_EQ(rec.road_contacts.heights[1][10], -0.2);
   EXPECT_FALSE(rec.ground_truth.has_value());
 }
 
@@ -209,9 +210,11 @@ TEST(BagRoundTrip, ForeignJointsAreSkippedWithWarnings) {
   const std::string path = dir.file("vehicle.bag");
   {
     rosbag::Bag bag(path, rosbag::bagmode::Write);
-    for (std::size_t i = 0; i < c.road.t.size(); ++i) {
-      const ros::Time s = stampAt(c.origin, c.road.t[i]);
-      bag.write("road/profile", s, roadProfileMessage(s, c.road.left[i], c.road.right[i]));
+    for (std::size_t i = 0; i < c.road_contacts.t.size(); ++i) {
+      const ros::Time s = stampAt(c.origin, c.road_contacts.t[i]);
+      bag.write(
+          "road/profile", s,
+          roadProfileMessage(s, c.road_contacts.heights[0][i], c.road_contacts.heights[1][i]));
     }
     sensor_msgs::JointState js;
     js.header.stamp = stampAt(c.origin, 0.5);
@@ -289,7 +292,7 @@ TEST(BagErrors, MissingGarbageAndTruncatedFiles) {
 TEST(BagErrors, NoRoadNoSamplesAndSamplesBeforeTheRoad) {
   ScratchDir dir;
   BagContents c = smallBag();
-  c.road = {};
+  c.road_contacts = ContactSeries{{}, {{}, {}}};  // no road messages
   const std::string no_road = dir.file("no_road.bag");
   writeBag(no_road, c);
   expectMessageContains([&] { readBag(no_road); }, no_road,

@@ -135,9 +135,7 @@ TEST(JointStateConversion, InfinityAndDuplicatesAreRejected) {
 }
 
 TEST(JointStateConversion, JointNamesAreConfigurable) {
-  SuspensionJoints joints;
-  joints.left = "fl_shock";
-  joints.right = "fr_shock";
+  const SuspensionJoints joints = suspensionJoints(*rollPlaneType(), {"fl_shock", "fr_shock"});
   auto c =
       measurementFromJointState(jointState({"fr_shock", "fl_shock"}, {2, 1}, {4, 3}), 0.0, joints);
   EXPECT_TRUE(c.problems.empty());

@@ -8,6 +8,7 @@
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {
@@ -25,7 +26,9 @@ EstimatorConfig paperConfig(int samples) {
 // `factor` times the config's (the estimator keeps the config's).
 MeasurementSeries dataFromVehicle(const EstimatorConfig& c, double factor, std::uint64_t seed) {
   EstimatorConfig truth = c;
-  for (double& k : truth.vehicle.spring_linear) k *= factor;
+  VehicleParameters v = VehicleParameters::from(*c.model);
+  for (double& k : v.spring_linear) k *= factor;
+  truth.model = std::make_shared<ModelParameters>(v.toModelParameters());
   const auto model = makeModel(truth, makeRoad(truth));
   return synthesizeFromConfig(truth, *model, seed);
 }

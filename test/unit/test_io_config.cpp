@@ -6,6 +6,7 @@
 #include <string>
 
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {
@@ -29,9 +30,9 @@ const char* kMinimal =
 
 TEST(Config, SpeedBumpFileHoldsThePaperSettings) {
   const EstimatorConfig c = loadConfigFile(kDir + "speed_bump.yaml");
-  EXPECT_DOUBLE_EQ(c.vehicle.bar_mass, 580.0);
-  EXPECT_DOUBLE_EQ(c.vehicle.tyre_stiffness[1], 96319.76);
-  EXPECT_DOUBLE_EQ(c.vehicle.spring_cubic[0], 1e5);
+  EXPECT_DOUBLE_EQ(VehicleParameters::from(*c.model).bar_mass, 580.0);
+  EXPECT_DOUBLE_EQ(VehicleParameters::from(*c.model).tyre_stiffness[1], 96319.76);
+  EXPECT_DOUBLE_EQ(VehicleParameters::from(*c.model).spring_cubic[0], 1e5);
   ASSERT_EQ(c.uncertain.size(), 2u);
   EXPECT_EQ(c.uncertain[1].name, "added_mass_position");
   EXPECT_DOUBLE_EQ(c.uncertain[1].relative_range, 0.25);
@@ -51,11 +52,11 @@ TEST(Config, SineFilesSelectTheSineRoadAndTheLinearVariant) {
   const EstimatorConfig sine = loadConfigFile(kDir + "sine_1hz.yaml");
   EXPECT_EQ(sine.road.source, RoadSource::kSine);
   EXPECT_DOUBLE_EQ(sine.road.sine.amplitude, 0.05);
-  EXPECT_EQ(sine.vehicle.damper, DamperLaw::kTanh);
+  EXPECT_EQ(VehicleParameters::from(*sine.model).damper, DamperLaw::kTanh);
   const EstimatorConfig linear = loadConfigFile(kDir + "sine_1hz_linear.yaml");
-  EXPECT_EQ(linear.vehicle.damper, DamperLaw::kLinear);
-  EXPECT_DOUBLE_EQ(linear.vehicle.spring_cubic[0], 0.0);
-  EXPECT_DOUBLE_EQ(linear.vehicle.spring_cubic[1], 0.0);
+  EXPECT_EQ(VehicleParameters::from(*linear.model).damper, DamperLaw::kLinear);
+  EXPECT_DOUBLE_EQ(VehicleParameters::from(*linear.model).spring_cubic[0], 0.0);
+  EXPECT_DOUBLE_EQ(VehicleParameters::from(*linear.model).spring_cubic[1], 0.0);
 }
 
 TEST(Config, MinimalFileTakesDefaults) {

@@ -11,6 +11,7 @@
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
+#include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {
@@ -112,7 +113,7 @@ double maxDifference(const MeasurementSeries& a, const MeasurementSeries& b) {
 TEST(SyntheticTruth, ShippedConfigsGiveTheOldDataBitForBit) {
   for (const char* name : {"speed_bump.yaml", "sine_1hz.yaml", "sine_1hz_linear.yaml"}) {
     const Case s(loadConfigFile(kDir + name));
-    EXPECT_FALSE(s.c.truth.vehicle.has_value()) << name;
+    EXPECT_FALSE(s.c.truth.model) << name;
     EXPECT_TRUE(s.c.truth.sensor.bias.empty() && s.c.truth.sensor.noise_floor.empty() &&
                 s.c.truth.sensor.quantisation.empty())
         << name;
@@ -140,11 +141,11 @@ TEST(SyntheticTruth, VehicleOverrideEqualsAModelOfTheOverriddenVehicle) {
   const Case over(bumpConfig("vehicle: {spring_linear_left: 20325.06}"));
   // The estimator keeps the vehicle section.
   EXPECT_EQ(dynamic_cast<const RollPlaneModel&>(*over.model).nominal().spring_linear[0], 19357.2);
-  ASSERT_TRUE(over.c.truth.vehicle.has_value());
-  EXPECT_EQ(over.c.truth.vehicle->spring_linear[0], 20325.06);
-  EXPECT_EQ(over.c.truth.vehicle->spring_linear[1], 19357.2);
+  ASSERT_TRUE(over.c.truth.model);
+  EXPECT_EQ(VehicleParameters::from(*over.c.truth.model).spring_linear[0], 20325.06);
+  EXPECT_EQ(VehicleParameters::from(*over.c.truth.model).spring_linear[1], 19357.2);
 
-  VehicleParameters v = over.c.vehicle;
+  VehicleParameters v = VehicleParameters::from(*over.c.model);
   v.spring_linear[0] = 20325.06;
   const RollPlaneModel reference(v, over.road);
   const ParameterMapping mapping(reference, over.c.uncertain);

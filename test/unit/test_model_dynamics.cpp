@@ -136,9 +136,9 @@ TEST(RollPlaneDynamics, ZeroRoadKeepsEquilibriumExactly) {
       s.amplitude = 0.0;
       road = std::make_shared<SineRoad>(s);
     } else {
-      road =
-          std::make_shared<SampledRoad>(std::vector<double>{0.0, 0.5, 1.0, 2.0},
-                                        std::vector<double>(4, 0.0), std::vector<double>(4, 0.0));
+      road = std::make_shared<SampledRoad>(
+          std::vector<double>{0.0, 0.5, 1.0, 2.0},
+          std::vector<std::vector<double>>(2, std::vector<double>(4, 0.0)));
     }
     const RollPlaneModel model(VehicleParameters(), road);
     params.resize(16, 3);
@@ -157,8 +157,8 @@ TEST(RollPlaneDynamics, UnitStepRoadSettlesAtStaticOffset) {
   // +1 cm and the suspension returns to its static extension (u = 0), for any spring law.
   const RollPlaneModel model(
       VehicleParameters(),
-      std::make_shared<SampledRoad>(std::vector<double>{0.0}, std::vector<double>{0.01},
-                                    std::vector<double>{0.01}));
+      std::make_shared<SampledRoad>(std::vector<double>{0.0},
+                                    std::vector<std::vector<double>>{{0.01}, {0.01}}));
   Eigen::MatrixXd params(16, 1);
   params.col(0) = paramsAt(model, 0.6, 0.4);
   const auto batch = model.prepare(params);

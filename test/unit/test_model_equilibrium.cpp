@@ -75,7 +75,7 @@ TEST(StaticEquilibrium, NonFiniteInputThrows) {
 
 TEST(VehicleParametersVector, OrderAndRoundTrip) {
   const RollPlaneModel model = makeModel();
-  ASSERT_EQ(vehicleParameterNames().size(), 16u);
+  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 16u);
   EXPECT_EQ(model.parameterIndex("bar_mass"), 0);
   EXPECT_EQ(model.parameterIndex("spring_cubic_right"), 8);
   EXPECT_EQ(model.parameterIndex("gravity"), 13);

@@ -70,44 +70,51 @@ TEST(SineRoad, OutOfPhase) {
   EXPECT_NEAR(SineRoad(s).height(0.125)[1], 0.05, 1e-15);
 }
 
+// Heights of a two-contact road at t.
+Eigen::Vector2d at(const ContactRoad& road, double t) {
+  Eigen::Vector2d h;
+  road.heights(t, h);
+  return h;
+}
+
 SampledRoad threeSamples() {
-  return SampledRoad({0.0, 1.0, 2.0}, {0.0, 1.0, 0.0}, {0.0, -2.0, -2.0});
+  return SampledRoad({0.0, 1.0, 2.0}, {{0.0, 1.0, 0.0}, {0.0, -2.0, -2.0}});
 }
 
 TEST(SampledRoad, LinearInterpolationHeldOutside) {
   const SampledRoad road = threeSamples();
-  EXPECT_EQ(road.height(0.5), Eigen::Vector2d(0.5, -1.0));
-  EXPECT_EQ(road.height(1.0), Eigen::Vector2d(1.0, -2.0));
-  EXPECT_NEAR(road.height(1.75)[0], 0.25, 1e-15);
-  EXPECT_EQ(road.height(1.75)[1], -2.0);
-  EXPECT_EQ(road.height(-3.0), Eigen::Vector2d(0.0, 0.0));
-  EXPECT_EQ(road.height(7.0), Eigen::Vector2d(0.0, -2.0));
+  EXPECT_EQ(at(road, 0.5), Eigen::Vector2d(0.5, -1.0));
+  EXPECT_EQ(at(road, 1.0), Eigen::Vector2d(1.0, -2.0));
+  EXPECT_NEAR(at(road, 1.75)[0], 0.25, 1e-15);
+  EXPECT_EQ(at(road, 1.75)[1], -2.0);
+  EXPECT_EQ(at(road, -3.0), Eigen::Vector2d(0.0, 0.0));
+  EXPECT_EQ(at(road, 7.0), Eigen::Vector2d(0.0, -2.0));
   expectTimes(road.breakpoints(0.0, 2.0), {1.0});
   expectTimes(road.breakpoints(-1.0, 5.0), {0.0, 1.0, 2.0});
   EXPECT_TRUE(road.breakpoints(0.2, 1.0).empty());
-  EXPECT_EQ(SampledRoad().height(1.0), Eigen::Vector2d::Zero());
+  EXPECT_EQ(at(SampledRoad(2), 1.0), Eigen::Vector2d::Zero());
 }
 
 TEST(SampledRoad, AppendRejectsBadSamplesNamingTheTime) {
   SampledRoad road = threeSamples();
   try {
-    road.append(1.5, 0.0, 0.0);
+    road.append(1.5, {0.0, 0.0});
     FAIL() << "time going backwards accepted";
   } catch (const std::invalid_argument& e) {
     EXPECT_NE(std::string(e.what()).find("t = 1.5"), std::string::npos) << e.what();
   }
-  EXPECT_THROW(road.append(2.0, 0.0, 0.0), std::invalid_argument);  // not strictly after
-  EXPECT_THROW(road.append(3.0, std::nan(""), 0.0), std::invalid_argument);
-  EXPECT_THROW(road.append(3.0, 0.0, std::numeric_limits<double>::infinity()),
+  EXPECT_THROW(road.append(2.0, {0.0, 0.0}), std::invalid_argument);  // not strictly after
+  EXPECT_THROW(road.append(3.0, {std::nan(""), 0.0}), std::invalid_argument);
+  EXPECT_THROW(road.append(3.0, {0.0, std::numeric_limits<double>::infinity()}),
                std::invalid_argument);
-  EXPECT_THROW(road.append(std::nan(""), 0.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(road.append(std::nan(""), {0.0, 0.0}), std::invalid_argument);
   EXPECT_EQ(road.size(), 3u);
-  road.append(3.0, 2.0, 0.0);
+  road.append(3.0, {2.0, 0.0});
   EXPECT_EQ(road.lastTime(), 3.0);
-  EXPECT_EQ(road.height(2.5), Eigen::Vector2d(1.0, -1.0));
-  EXPECT_THROW(SampledRoad({0.0, 1.0}, {0.0}, {0.0, 0.0}), std::invalid_argument);
-  EXPECT_THROW(SampledRoad({1.0, 0.0}, {0.0, 0.0}, {0.0, 0.0}), std::invalid_argument);
-  EXPECT_THROW(SampledRoad().firstTime(), std::logic_error);
+  EXPECT_EQ(at(road, 2.5), Eigen::Vector2d(1.0, -1.0));
+  EXPECT_THROW(SampledRoad({0.0, 1.0}, {{0.0}, {0.0, 0.0}}), std::invalid_argument);
+  EXPECT_THROW(SampledRoad({1.0, 0.0}, {{0.0, 0.0}, {0.0, 0.0}}), std::invalid_argument);
+  EXPECT_THROW(SampledRoad(2).firstTime(), std::logic_error);
 }
 
 TEST(SampledRoad, DiscardKeepsTheSampleAtOrBefore) {
@@ -119,7 +126,7 @@ TEST(SampledRoad, DiscardKeepsTheSampleAtOrBefore) {
   EXPECT_EQ(road.firstTime(), 1.0);
   road.discardBefore(1.5);
   EXPECT_EQ(road.size(), 2u);
-  EXPECT_EQ(road.height(1.5), Eigen::Vector2d(0.5, -2.0));  // interpolation still possible
+  EXPECT_EQ(at(road, 1.5), Eigen::Vector2d(0.5, -2.0));  // interpolation still possible
   road.discardBefore(10.0);
   EXPECT_EQ(road.size(), 1u);
   EXPECT_EQ(road.firstTime(), 2.0);

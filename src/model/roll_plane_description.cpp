@@ -1,0 +1,155 @@
+// The roll-plane model's description (docs/method.md §1): its parameter
+// table, settings, channels, contacts and joints, and the binding of each
+// table entry to its VehicleParameters field. The only place that names them.
+#include <limits>
+#include <stdexcept>
+
+#include "pc_ekf/model/roll_plane_model.h"
+
+namespace pc_ekf {
+namespace {
+
+using Field = double& (*)(VehicleParameters&);
+struct Entry {
+  ParameterSpec spec;
+  Field field;
+};
+#define PC_EKF_FIELD(member) [](VehicleParameters& p) -> double& { return p.member; }
+
+// Any value at a point, >= 0 when configured.
+ParameterDomain configuredNonNegative() {
+  ParameterDomain d = anyValue();
+  d.config_lower = 0.0;
+  return d;
+}
+
+// Strictly positive unless said; the added mass may go negative at a point as
+// long as the total mass and the combined inertia stay positive (model rule).
+const std::vector<Entry>& parameterEntries() {
+  static const std::vector<Entry> e = {
+      {{"bar_mass", "kg", 580.0, positive(), "mass m of the bar (body)"}, PC_EKF_FIELD(bar_mass)},
+      {{"unsprung_mass_left", "kg", 36.26, positive(), "unsprung mass m_t, left"},
+       PC_EKF_FIELD(unsprung_mass[0])},
+      {{"unsprung_mass_right", "kg", 36.26, positive(), "unsprung mass m_t, right"},
+       PC_EKF_FIELD(unsprung_mass[1])},
+      {{"damping_left", "N s/m", 710.70, nonNegative(), "damping c, left"},
+       PC_EKF_FIELD(damping[0])},
+      {{"damping_right", "N s/m", 710.70, nonNegative(), "damping c, right"},
+       PC_EKF_FIELD(damping[1])},
+      {{"spring_linear_left", "N/m", 19357.2, positive(), "linear spring stiffness k, left"},
+       PC_EKF_FIELD(spring_linear[0])},
+      {{"spring_linear_right", "N/m", 19357.2, positive(), "linear spring stiffness k, right"},
+       PC_EKF_FIELD(spring_linear[1])},
+      {{"spring_cubic_left", "N/m^3", 100000.0, nonNegative(), "cubic spring stiffness k3, left"},
+       PC_EKF_FIELD(spring_cubic[0])},
+      {{"spring_cubic_right", "N/m^3", 100000.0, nonNegative(), "cubic spring stiffness k3, right"},
+       PC_EKF_FIELD(spring_cubic[1])},
+      {{"bar_length", "m", 1.524, positive(), "length L of the bar (track)"},
+       PC_EKF_FIELD(bar_length)},
+      {{"bar_inertia", "kg m^2", 63.3316, positive(), "inertia I of the bar about its middle"},
+       PC_EKF_FIELD(bar_inertia)},
+      {{"tyre_stiffness_left", "N/m", 96319.76, positive(), "tyre stiffness k_t, left"},
+       PC_EKF_FIELD(tyre_stiffness[0])},
+      {{"tyre_stiffness_right", "N/m", 96319.76, positive(), "tyre stiffness k_t, right"},
+       PC_EKF_FIELD(tyre_stiffness[1])},
+      {{"gravity", "m/s^2", 9.81, positive(), "gravitational acceleration g"},
+       PC_EKF_FIELD(gravity)},
+      {{"added_mass", "kg", 200.0, configuredNonNegative(),
+        "point load M on the bar (a point: total mass and inertia > 0)"},
+       PC_EKF_FIELD(added_mass)},
+      {{"added_mass_position", "m", 0.762, withinSumOf({"bar_length"}),
+        "position d_CG of M from the left end"},
+       PC_EKF_FIELD(added_mass_position)},
+  };
+  return e;
+}
+
+const std::vector<Entry>& settingEntries() {
+  static const std::vector<Entry> e = {
+      {{"damper_tanh_scale", "m/s", 0.2, positive(), "tanh damper: F_C = c scale tanh(rate v)"},
+       PC_EKF_FIELD(damper_tanh_scale)},
+      {{"damper_tanh_rate", "s/m", 10.0, positive(), "tanh damper: rate"},
+       PC_EKF_FIELD(damper_tanh_rate)},
+  };
+  return e;
+}
+#undef PC_EKF_FIELD
+
+ParameterTable tableOf(const std::vector<Entry>& entries) {
+  std::vector<ParameterSpec> specs;
+  for (const auto& e : entries) specs.push_back(e.spec);
+  return ParameterTable(std::move(specs));
+}
+
+Eigen::VectorXd read(const std::vector<Entry>& entries, VehicleParameters p) {
+  Eigen::VectorXd v(static_cast<Eigen::Index>(entries.size()));
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    v[static_cast<Eigen::Index>(i)] = entries[i].field(p);
+  }
+  return v;
+}
+
+void write(const std::vector<Entry>& entries, const Eigen::Ref<const Eigen::VectorXd>& v,
+           VehicleParameters& p) {
+  for (std::size_t i = 0; i < entries.size(); ++i) {
+    entries[i].field(p) = v[static_cast<Eigen::Index>(i)];
+  }
+}
+
+}  // namespace
+
+const ModelDescription& rollPlaneDescription() {
+  static const ModelDescription d({
+      "roll_plane",
+      "The paper's 4-DOF roll-plane bar on two suspensions, left (1) and right (2) "
+      "(docs/method.md §1).",
+      tableOf(parameterEntries()),
+      tableOf(settingEntries()),
+      {damperChoice()},
+      {"x1", "x2", "xr1", "xr2", "x1dot", "x2dot", "xr1dot", "xr2dot"},
+      {{"u1", "m", "suspension extension x1 - xr1, left"},
+       {"u2", "m", "suspension extension x2 - xr2, right"},
+       {"v1", "m/s", "suspension extension rate, left"},
+       {"v2", "m/s", "suspension extension rate, right"}},
+      {{"left", "y1", "left tyre"}, {"right", "y2", "right tyre"}},
+      {{"left_suspension", "left", "u1", "v1"}, {"right_suspension", "right", "u2", "v2"}},
+  });
+  return d;
+}
+
+VehicleParameters::VehicleParameters() {
+  write(parameterEntries(), rollPlaneDescription().parameters().defaults(), *this);
+  write(settingEntries(), rollPlaneDescription().settings().defaults(), *this);
+}
+
+Eigen::VectorXd VehicleParameters::toVector() const { return read(parameterEntries(), *this); }
+
+VehicleParameters VehicleParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
+                                                const VehicleParameters& laws) {
+  const int n = rollPlaneDescription().parameters().size();
+  if (v.size() != n) {
+    throw std::invalid_argument("VehicleParameters::fromVector: expected " + std::to_string(n) +
+                                " values, got " + std::to_string(v.size()));
+  }
+  VehicleParameters p = laws;  // damper law and tanh constants are not in the vector
+  write(parameterEntries(), v, p);
+  return p;
+}
+
+VehicleParameters VehicleParameters::from(const ModelParameters& m) {
+  VehicleParameters p;
+  p = fromVector(m.values, p);
+  write(settingEntries(), m.settings, p);
+  p.damper = damperLaw(m.choice(rollPlaneDescription(), "damper"));
+  return p;
+}
+
+ModelParameters VehicleParameters::toModelParameters() const {
+  ModelParameters m;
+  m.values = toVector();
+  m.settings = read(settingEntries(), *this);
+  m.choices = {damperChoiceName(damper)};
+  return m;
+}
+
+}  // namespace pc_ekf
