@@ -201,9 +201,12 @@ case_redo() {
   fleet --bags "$work/bags_redo" --scheduler "$scheduler" --out "$out" >"$work/fleet_redo_2.log" 2>&1 &&
     "${check[@]}" run "$out" --skipped 4 --ran 0 || return 1
   # This run uses the installed estimate_fleet when test.sh has made the
-  # install space: it must find the estimate_offline installed beside it.
+  # install space (not one older than the build; install keeps whole-second
+  # mtimes): it must find the estimate_offline installed beside it.
   local exe=$bin/estimate_fleet installed=$PC_EKF_WS/install/lib/pc_ekf
-  [ -x "$installed/estimate_fleet" ] && exe=$installed/estimate_fleet
+  [ -x "$installed/estimate_fleet" ] &&
+    [ "$(stat -c %Y "$bin/estimate_offline")" -le "$(stat -c %Y "$installed/estimate_offline")" ] &&
+    exe=$installed/estimate_fleet
   timeout 120 "$exe" --config "$config" --bags "$work/bags_redo" --scheduler "$scheduler" \
     --redo-errors --out "$out" >"$work/fleet_redo_3.log" 2>&1 &&
     "${check[@]}" run "$out" --skipped 0 --ran 4 || return 1
