@@ -78,13 +78,13 @@ TEST_F(EstimatorBasic, OneEstimatePerSampleEqualToEstimateOffline) {
     area += pdf.densities[b] * (pdf.edges[b + 1] - pdf.edges[b]);
   }
   EXPECT_NEAR(area, 1.0, 1e-9);
-  // The node's cached germ draws (one set for every parameter) give pcHistogram's
-  // numbers (estimate_offline's PDFs).
+  // The node's cached germ draws (speed_bump.yaml: pdf.shared_draws false, so
+  // parameter i draws with seed + i) give pcHistogram's numbers (estimate_offline's PDFs).
   const auto propagator = makePropagator(config_, makeModel(config_, makeRoad(config_)));
   const Eigen::MatrixXd coefficients = coefficientsOf(msgs.back());
   for (int i = 0; i < 2; ++i) {
     const Histogram h = pcHistogram(propagator->basis(), coefficients.row(i).transpose(),
-                                    config_.pdf.draws, config_.pdf.bins, config_.pdf.seed);
+                                    config_.pdf.draws, config_.pdf.bins, config_.pdf.seed + i);
     const std::size_t offset = i * (config_.pdf.bins + 1), bins = i * config_.pdf.bins;
     EXPECT_DOUBLE_EQ(pdf.edges[offset], h.edges(0)) << i;
     EXPECT_DOUBLE_EQ(pdf.edges[offset + config_.pdf.bins], h.edges(config_.pdf.bins)) << i;

@@ -86,8 +86,7 @@ int run(const Options& o) {
   ts.analytic_interval = o.dt;
   EstimatorTimeline timeline(ts);
   const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>(2)));
-  const auto pdfs =
-      std::make_shared<ParameterPdfSampler>(prior->basis(), c.pdf.draws, c.pdf.bins, c.pdf.seed);
+  const auto pdfs = makePdfSampler(c, prior->basis(), prior->parameterCount());
   std::unique_ptr<EstimatorRun> run;
 
   const ros::Time origin(1000000, 0);
