@@ -77,7 +77,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const pc_ekf::BagRecord record = pc_ekf::readBag(path);
     checkRecord(record);
     if (verbose) {
-      std::fprintf(stderr, "read: %zu road samples, %zu samples\n", record.road.t.size(),
+      std::fprintf(stderr, "read: %zu road samples, %zu samples\n", record.road_contacts.t.size(),
                    record.samples.size());
     }
   } catch (const pc_ekf::BagError& e) {
