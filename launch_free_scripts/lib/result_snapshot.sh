@@ -53,5 +53,5 @@ fi
 
 # Drop wall-clock fields so that two runs of one tree compare equal.
 find "$out" \( -name '*.json' -o -name '*.jsonl' \) -print0 | xargs -0 sed -i -E \
-  -e '/^ *"wall_time_s": [^,]*,?$/d' -e 's/"wall_time_s": *[0-9.eE+-]+, *//g'
+  -e '/^ *"wall_(time_)?s": [^,]*,?$/d' -e 's/"wall_(time_)?s": *[0-9.eE+-]+, *//g'
 echo "snapshot in $out"
