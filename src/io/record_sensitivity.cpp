@@ -46,23 +46,20 @@ EstimatorConfig pruneTolerances(const EstimatorConfig& c, const PriorSensitivity
     if (!c.safeguards.drift.empty()) drift.push_back(c.safeguards.drift[i]);
   }
   out.safeguards.drift = drift;
-  // truth.xi follows the parameters it belongs to.
-  std::vector<double> xi;
-  for (int i = 0; i < static_cast<int>(c.uncertain.size()); ++i) {
-    bool kept = false;
-    for (const auto& u : out.uncertain) kept = kept || u.name == c.uncertain[i].name;
-    if (kept && i < static_cast<int>(c.truth.xi.size())) xi.push_back(c.truth.xi[i]);
+  // truth.xi and the schedule follow the parameters they belong to.
+  std::vector<bool> kept(c.uncertain.size(), false);
+  for (std::size_t i = 0, k = 0; i < c.uncertain.size() && k < out.uncertain.size(); ++i) {
+    if (c.uncertain[i].name == out.uncertain[k].name) kept[i] = true, ++k;
   }
-  out.truth.xi = xi;
-  for (auto& change : out.truth.schedule) {
-    std::vector<double> keep;
-    for (int i = 0; i < static_cast<int>(c.uncertain.size()); ++i) {
-      bool kept = false;
-      for (const auto& u : out.uncertain) kept = kept || u.name == c.uncertain[i].name;
-      if (kept) keep.push_back(change.xi[i]);
+  const auto keep = [&kept](const std::vector<double>& xi) {
+    std::vector<double> r;
+    for (std::size_t i = 0; i < xi.size() && i < kept.size(); ++i) {
+      if (kept[i]) r.push_back(xi[i]);
     }
-    change.xi = keep;
-  }
+    return r;
+  };
+  out.truth.xi = keep(c.truth.xi);
+  for (auto& change : out.truth.schedule) change.xi = keep(change.xi);
   return out;
 }
 

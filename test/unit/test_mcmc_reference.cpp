@@ -9,6 +9,7 @@
 #include <random>
 
 #include "pc_ekf/filter/mcmc_reference.h"
+#include "linear_residual.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/model/roll_plane_model.h"
@@ -24,23 +25,7 @@ GermSpec germ(GermFamily family) {
   return g;
 }
 
-// r = L^-1 (xi - mu): likelihood N(mu, L L^T).
-class LinearResidual : public PosteriorResidual {
- public:
-  LinearResidual(Eigen::VectorXd mu, Eigen::MatrixXd chol)
-      : mu_(std::move(mu)), l_(std::move(chol)) {}
-  int dimension() const override { return static_cast<int>(mu_.size()); }
-  Eigen::MatrixXd residuals(const Eigen::MatrixXd& xi) const override {
-    evaluations_ += xi.cols();
-    return l_.triangularView<Eigen::Lower>().solve(xi.colwise() - mu_);
-  }
-  long simulations() const override { return evaluations_; }
-
- private:
-  Eigen::VectorXd mu_;
-  Eigen::MatrixXd l_;
-  mutable long evaluations_ = 0;
-};
+using testing::LinearResidual;
 
 TEST(McmcDiagnostics, IndependentDrawsHaveFullSizeAndUnitRHat) {
   std::mt19937_64 rng(7);
@@ -90,7 +75,7 @@ TEST(McmcReference, GaussianPriorTimesCorrelatedLikelihoodIsClosedForm) {
   Eigen::Matrix3d s;
   s << 0.04, 0.03, 0.0, 0.03, 0.09, -0.02, 0.0, -0.02, 0.25;
   const Eigen::Vector3d mu(0.5, -0.3, 1.0);
-  const LinearResidual residual(mu, s.llt().matrixL());
+  const LinearResidual residual(mu, s.llt().matrixL(), true);
   const Eigen::Matrix3d p = (Eigen::Matrix3d::Identity() + s.inverse()).inverse();
   const Eigen::Vector3d mean = p * s.inverse() * mu;
   McmcSettings settings;
@@ -118,7 +103,8 @@ TEST(McmcReference, GaussianPriorTimesCorrelatedLikelihoodIsClosedForm) {
 TEST(McmcReference, UninformativeDataReturnTheBetaPrior) {
   // Likelihood std 100 on a Beta(2,2) germ on [-1, 1]: the posterior is the
   // prior, mean 0 and std 1/sqrt(5); proposals outside the support are refused.
-  const LinearResidual residual(Eigen::Vector2d::Zero(), 100.0 * Eigen::Matrix2d::Identity());
+  const LinearResidual residual(Eigen::Vector2d::Zero(), 100.0 * Eigen::Matrix2d::Identity(),
+                                true);
   McmcSettings settings;
   settings.burn_in = 1000;
   settings.samples = 6000;
@@ -134,7 +120,7 @@ TEST(McmcReference, UninformativeDataReturnTheBetaPrior) {
 }
 
 TEST(McmcReference, BadInputIsRefusedWithItsName) {
-  const LinearResidual residual(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity());
+  const LinearResidual residual(Eigen::Vector2d::Zero(), Eigen::Matrix2d::Identity(), true);
   const std::vector<GermSpec> prior(2, germ(GermFamily::kGaussian));
   McmcSettings s;
   EXPECT_THROW(

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "pc_ekf/filter/posterior_prior.h"
+#include "linear_residual.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/model/roll_plane_model.h"
@@ -24,20 +25,7 @@ GermSpec germ(GermFamily family, double alpha = 2.0, double beta = 2.0) {
   return g;
 }
 
-// r = L^-1 (xi - mu): likelihood N(mu, L L^T).
-class LinearResidual : public PosteriorResidual {
- public:
-  LinearResidual(Eigen::VectorXd mu, Eigen::MatrixXd chol)
-      : mu_(std::move(mu)), l_(std::move(chol)) {}
-  int dimension() const override { return static_cast<int>(mu_.size()); }
-  Eigen::MatrixXd residuals(const Eigen::MatrixXd& xi) const override {
-    return l_.triangularView<Eigen::Lower>().solve(xi.colwise() - mu_);
-  }
-
- private:
-  Eigen::VectorXd mu_;
-  Eigen::MatrixXd l_;
-};
+using testing::LinearResidual;
 
 // r1 = (xi1^2 - 1/4) / 0.01 (modes near +-1/2), r2 = (xi2 - 0.1) / 0.05.
 class TwoModeResidual : public PosteriorResidual {
