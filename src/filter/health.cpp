@@ -46,9 +46,17 @@ HealthMonitor::HealthMonitor(const PcPropagator& propagator, const HealthSetting
   const int n = propagator.parameterCount();
   psi_ = propagator.basis().evaluate(
       sampleGerms(propagator.basis(), settings.support_draws, settings.seed));
+  psi_t_ = psi_.transpose();
+  values_.resize(psi_.rows());
+  near_.resize(psi_.rows());
+  const auto& indices = propagator.basis().multiIndices();
+  for (std::size_t j = 0; j < indices.size(); ++j) {
+    int degree = 0;
+    for (int k : indices[j]) degree += k;
+    if (degree == 1) first_degree_.push_back(static_cast<Eigen::Index>(j));
+  }
   psi_max_abs_ = psi_.rows() > 0 ? Eigen::VectorXd(psi_.cwiseAbs().colwise().maxCoeff().transpose())
                                  : Eigen::VectorXd::Zero(psi_.cols());
-  values_.resize(psi_.rows());
   lower_.resize(n);
   upper_.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -81,19 +89,45 @@ double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i)
   const double lower = lower_[i], upper = upper_[i], mean = coeffs(i, 0);
   // Every draw's value lies in mean +- spread (|psi_j| <= psi_max_abs_j), up to the
   // dot product's round-off (bounded by S eps (|mean| + spread); 4x margin). When
-  // that interval is inside the support, no draw is outside: the 2000 x S product
-  // is skipped, which is the common case once the data have narrowed the PDF.
+  // that interval is inside the support, no draw is outside, which is the common
+  // case once the data have narrowed the PDF.
+  const Eigen::Index terms = coeffs.cols();
   double spread = 0.0;
-  for (Eigen::Index j = 1; j < coeffs.cols(); ++j) spread += std::abs(coeffs(i, j)) * psi_max_abs_[j];
-  const double slack = 4.0 * static_cast<double>(coeffs.cols()) *
-                       std::numeric_limits<double>::epsilon() * (std::abs(mean) + spread);
+  for (Eigen::Index j = 1; j < terms; ++j) spread += std::abs(coeffs(i, j)) * psi_max_abs_[j];
+  const double slack = 4.0 * static_cast<double>(terms) * std::numeric_limits<double>::epsilon() *
+                       (std::abs(mean) + spread);
   if (mean - spread - slack >= lower && mean + spread + slack <= upper) return 0.0;
-  values_.noalias() = psi_ * coeffs.row(i).transpose();
-  Eigen::Index outside = 0;
-  for (Eigen::Index d = 0; d < values_.size(); ++d) {
-    outside += (values_[d] < lower) || (values_[d] > upper);
+  // Otherwise per draw: the mean plus the first-degree terms (the bulk of a
+  // parameter's spread, n products per draw instead of S) is within `rest`
+  // (the higher terms' bounds) + slack of the value, so only the draws where
+  // that reaches a bound need the value itself, summed as psi_ * c sums it
+  // (gemvValue): the count is the full product's.
+  double rest = spread;
+  near_.setConstant(mean);
+  for (Eigen::Index j : first_degree_) {
+    near_ += coeffs(i, j) * psi_.col(j);
+    rest -= std::abs(coeffs(i, j)) * psi_max_abs_[j];
   }
-  return static_cast<double>(outside) / static_cast<double>(values_.size());
+  // `rest` by subtraction carries round-off of the order of spread eps: twice the slack covers it.
+  const double margin = std::max(rest, 0.0) + 2.0 * slack;
+  candidates_.clear();
+  for (Eigen::Index d = 0; d < psi_.rows(); ++d) {
+    if (!(near_[d] - margin >= lower && near_[d] + margin <= upper)) candidates_.push_back(d);
+  }
+  Eigen::Index outside = 0;
+  if (static_cast<Eigen::Index>(candidates_.size()) * 8 > psi_.rows()) {
+    // Many candidates (a parameter spread over many germs): the whole product.
+    values_.noalias() = psi_ * coeffs.row(i).transpose();
+    for (Eigen::Index d = 0; d < values_.size(); ++d) outside += (values_[d] < lower) || (values_[d] > upper);
+  } else {
+    row_ = coeffs.row(i);
+    const int block_cols = gemvBlockColumns(psi_.rows(), terms);
+    for (Eigen::Index d : candidates_) {
+      const double v = gemvValue(psi_t_.col(d).data(), 1, row_.data(), terms, block_cols);
+      outside += (v < lower) || (v > upper);
+    }
+  }
+  return static_cast<double>(outside) / static_cast<double>(psi_.rows());
 }
 
 HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const ForecastReport& forecast,

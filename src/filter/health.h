@@ -68,7 +68,12 @@ class HealthMonitor {
   HealthSettings settings_;
   Eigen::MatrixXd psi_;           // support_draws x S basis values at fixed germ samples
   Eigen::VectorXd psi_max_abs_;   // per term, max over the draws of |psi_j|
+  Eigen::MatrixXd psi_t_;         // its transpose: one draw's values contiguous
   Eigen::VectorXd values_;        // support_draws, reused
+  Eigen::RowVectorXd row_;        // the coefficients of one quantity, contiguous (reused)
+  Eigen::VectorXd near_;          // support_draws: mean + first-degree terms (reused)
+  std::vector<Eigen::Index> first_degree_;  // the basis terms of total degree 1
+  std::vector<Eigen::Index> candidates_;  // draws the bounds do not show inside (reused)
   Eigen::VectorXd lower_, upper_;
   std::vector<double> bound_cache_[2];  // [lower, upper][dof], NaN = not yet computed
   std::deque<std::pair<double, int>> window_;  // (nis, channels)

@@ -63,8 +63,10 @@ void applyDrift(Eigen::MatrixXd& x, int first_parameter, const Eigen::VectorXd& 
     const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(used);
     const Eigen::Index rank = qr.rank();
     if (rank < higher) {
-      const Eigen::MatrixXd q_full = qr.householderQ();
-      x.row(row).tail(higher) += std::sqrt(q) * q_full.col(rank).transpose();
+      // Q's column `rank` alone (the reflectors applied to e_rank), not all of Q.
+      Eigen::VectorXd direction = Eigen::VectorXd::Unit(higher, rank);
+      direction.applyOnTheLeft(qr.householderQ());
+      x.row(row).tail(higher) += std::sqrt(q) * direction.transpose();
       continue;
     }
     auto own = x.row(row).tail(higher);

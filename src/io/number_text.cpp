@@ -13,6 +13,12 @@ std::string roundTripText(double v) {
   return std::string(text, r.ptr);
 }
 
+void appendG17(std::string& out, double v) {
+  char text[40];
+  const auto r = std::to_chars(text, text + sizeof(text), v, std::chars_format::general, 17);
+  out.append(text, r.ptr);
+}
+
 std::optional<double> parseFiniteDouble(const std::string& token) {
   char* end = nullptr;
   errno = 0;

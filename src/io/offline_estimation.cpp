@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <future>
+#include <optional>
 #include <stdexcept>
 
 #include "pc_ekf/filter/batch_update.h"
@@ -49,8 +50,8 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
 // The draws do not depend on the data, so the sampler is built on a second
 // thread while the filter runs (same numbers whatever the timing).
 using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
-PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, const PolynomialBasis& basis) {
-  return std::async(std::launch::async, [&c, &basis] {
+PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis) {
+  return std::async(std::launch::async, [&c, basis = std::move(basis)] {
     return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()));
   });
 }
@@ -78,10 +79,35 @@ Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
   return h;
 }
 
+// The multi-rate coherence check's filter (docs/method.md §5.2): the same
+// filter on every k-th sample, on a thread of its own (it depends on nothing
+// the full-rate filter computes) with a one-thread copy of the propagator
+// (bitwise the same forecast). Empty when the record is too short.
+using CoherenceFuture = std::future<std::optional<StepResult>>;
+CoherenceFuture startCoherenceFilter(const EstimatorConfig& c, const MeasurementSeries& series,
+                                     const PcPropagator& prop, const OneStepSettings& settings) {
+  MeasurementSeries dec = decimate(series, c.health.coherence_decimation);
+  if (!(dec.size() >= 1 && series.size() >= 2 * dec.size())) {
+    std::promise<std::optional<StepResult>> none;
+    none.set_value(std::nullopt);
+    return none.get_future();
+  }
+  return std::async(std::launch::async, [dec = std::move(dec), prop = prop.withThreads(1), settings] {
+    OneStepFilter coarse(prop, settings);
+    StepResult d;
+    for (const Measurement& m : dec) d = coarse.process(m);
+    return std::optional<StepResult>(std::move(d));
+  });
+}
+
 void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
-                std::shared_ptr<const PcPropagator> prop, OfflineResult* r) {
-  const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
+                std::shared_ptr<const MechanicalModel> model, OfflineResult* r) {
+  // The PDF draws depend only on the basis: drawn while the propagator is built and the filter runs.
+  const PdfSamplerFuture pdf_sampler = startPdfSampler(
+      c, PolynomialBasis(ParameterMapping(*model, c.uncertain).germs(), c.pc_order, c.pc_truncation));
+  const std::shared_ptr<const PcPropagator> prop = makePropagator(c, model);
   const OneStepSettings settings = makeOneStepSettings(c);
+  CoherenceFuture coherence = startCoherenceFilter(c, series, *prop, settings);
   OneStepFilter filter(prop, settings);
   StepResult last;
   int nested = 0, forecast_problems = 0;
@@ -123,16 +149,11 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   r->healthy = !nonfinite && last.health.healthy();
 
   // Multi-rate coherence (docs/method.md §5.2): the same filter on every k-th sample.
-  const int k = c.health.coherence_decimation;
-  const MeasurementSeries dec = decimate(series, k);
-  r->coherence.decimation = k;
+  r->coherence.decimation = c.health.coherence_decimation;
   r->coherence.threshold = c.health.coherence_threshold;
-  if (dec.size() >= 1 && series.size() >= 2 * dec.size()) {
-    OneStepFilter coarse(prop, settings);
-    StepResult d;
-    for (const Measurement& m : dec) d = coarse.process(m);
+  if (const std::optional<StepResult> d = coherence.get()) {
     r->coherence.available = true;
-    r->coherence.disagreement = coherenceDisagreement(last.mean, last.stddev, d.mean, d.stddev);
+    r->coherence.disagreement = coherenceDisagreement(last.mean, last.stddev, d->mean, d->stddev);
     r->coherence.flagged =
         !(r->coherence.disagreement.array() <= c.health.coherence_threshold).all();
     if (r->coherence.flagged) {
@@ -263,7 +284,7 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
   r.update = toString(c.update);
   r.samples = static_cast<int>(series.size());
   switch (method) {
-    case EstimationMethod::kOneStep: runOneStep(c, series, makePropagator(c, model), &r); break;
+    case EstimationMethod::kOneStep: runOneStep(c, series, model, &r); break;
     case EstimationMethod::kWholeSet: runBatch(c, series, makePropagator(c, model), {1.0}, &r); break;
     case EstimationMethod::kEsMda:
       runBatch(c, series, makePropagator(c, model), c.es_mda.alphas, &r);

@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "pc_ekf/io/number_text.h"
 #include "pc_ekf/io/offline_estimation.h"
 
 namespace pc_ekf {
@@ -106,42 +107,58 @@ void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
   std::ofstream json = openOutput(dir + "/result.json");
   json << toJson(r);
 
-  std::ofstream samples = openOutput(dir + "/samples.csv");
-  samples << "index,t";
+  // The CSVs are built as text first (appendG17: the stream's %.17g digits).
+  std::string text = "index,t";
   const int terms = r.records.empty() ? 0 : static_cast<int>(r.records[0].coefficients.cols());
   for (const auto& p : r.parameters) {
-    samples << ',' << p.name << "_mean," << p.name << "_stddev";
-    for (int j = 0; j < terms; ++j) samples << ',' << p.name << "_c" << j;
+    text += ',' + p.name + "_mean," + p.name + "_stddev";
+    for (int j = 0; j < terms; ++j) text += ',' + p.name + "_c" + std::to_string(j);
   }
-  samples << ",nis,nis_window_outside,band_nested,healthy";
-  for (const auto& channel : r.loo_channels) samples << ",loo_" << channel;
-  samples << '\n';
+  text += ",nis,nis_window_outside,band_nested,healthy";
+  for (const auto& channel : r.loo_channels) text += ",loo_" + channel;
+  text += '\n';
   for (const SampleRecord& s : r.records) {
-    samples << s.index << ',' << s.time;
+    text += std::to_string(s.index);
+    text += ',';
+    appendG17(text, s.time);
     for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
-      samples << ',' << s.mean[i] << ',' << s.stddev[i];
-      for (int j = 0; j < terms; ++j) samples << ',' << s.coefficients(i, j);
+      text += ',';
+      appendG17(text, s.mean[i]);
+      text += ',';
+      appendG17(text, s.stddev[i]);
+      for (int j = 0; j < terms; ++j) {
+        text += ',';
+        appendG17(text, s.coefficients(i, j));
+      }
     }
-    samples << ',' << s.nis << ',' << s.nis_window_outside << ',' << s.band_nested << ','
-            << s.healthy;
+    text += ',';
+    appendG17(text, s.nis);
+    for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) text += flag ? ",1" : ",0";
     // Empty cells: no leave-one-out error for this sample (a point left out).
     for (std::size_t i = 0; i < r.loo_channels.size(); ++i) {
-      samples << ',';
+      text += ',';
       if (static_cast<std::size_t>(s.loo_error.size()) == r.loo_channels.size())
-        samples << s.loo_error[i];
+        appendG17(text, s.loo_error[i]);
     }
-    samples << '\n';
+    text += '\n';
   }
+  std::ofstream samples = openOutput(dir + "/samples.csv");
+  samples << text;
 
-  std::ofstream pdfs = openOutput(dir + "/pdfs.csv");
-  pdfs << "parameter,bin_low,bin_high,density\n";
+  text = "parameter,bin_low,bin_high,density\n";
   for (std::size_t i = 0; i < r.pdfs.size() && i < r.parameters.size(); ++i) {
     const Histogram& h = r.pdfs[i];
     for (Eigen::Index b = 0; b < h.densities.size(); ++b) {
-      pdfs << r.parameters[i].name << ',' << h.edges[b] << ',' << h.edges[b + 1] << ','
-           << h.densities[b] << '\n';
+      text += r.parameters[i].name;
+      for (double v : {h.edges[b], h.edges[b + 1], h.densities[b]}) {
+        text += ',';
+        appendG17(text, v);
+      }
+      text += '\n';
     }
   }
+  std::ofstream pdfs = openOutput(dir + "/pdfs.csv");
+  pdfs << text;
   if (!samples || !pdfs || !json) throw std::runtime_error(dir + ": writing the outputs failed");
 }
 

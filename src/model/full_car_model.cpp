@@ -1,7 +1,10 @@
 // Full-car ride model: parameter checks and the batched right-hand side.
 #include "pc_ekf/model/full_car_model.h"
 
+#include <array>
+#include <atomic>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <utility>
 
@@ -10,6 +13,33 @@
 namespace pc_ekf {
 
 namespace {
+
+// A direct-mapped table of the thread's latest equilibria, keyed by the model
+// and the exact bits of the parameter vector (a hit returns what the solve
+// would: it is deterministic).
+struct EquilibriumMemo {
+  struct Slot {
+    std::uint64_t model = 0;  // 0: empty
+    Eigen::VectorXd params;
+    FullCarEquilibrium equilibrium;
+    std::string error;  // the solve's failure, if it failed
+  };
+  static constexpr std::size_t kSlots = 1024;
+  std::array<Slot, kSlots> slots;
+
+  static std::size_t slotOf(std::uint64_t model, const Eigen::Ref<const Eigen::VectorXd>& p) {
+    std::uint64_t h = 1469598103934665603ull ^ model;  // FNV-1a over the bytes
+    for (Eigen::Index i = 0; i < p.size(); ++i) {
+      std::uint64_t bits;
+      const double v = p[i];
+      std::memcpy(&bits, &v, sizeof bits);
+      for (int b = 0; b < 8; ++b) h = (h ^ ((bits >> (8 * b)) & 0xff)) * 1099511628211ull;
+    }
+    return static_cast<std::size_t>(h % kSlots);
+  }
+};
+
+std::atomic<std::uint64_t> next_model_id{1};
 
 // Per-point constants, one column per quantity (PointConstantTable).
 struct PointConstants : PointConstantTable {
@@ -196,6 +226,7 @@ FullCarModel::FullCarModel(const FullCarParameters& nominal,
                            std::shared_ptr<const ContactRoad> road)
     : nominal_(nominal),
       nominal_vector_(nominal.toVector()),
+      id_(next_model_id++),
       h_(Eigen::MatrixXd::Zero(8, 14)),
       road_(std::move(road)) {
   if (!road_) throw std::invalid_argument("FullCarModel: no road input");
@@ -227,11 +258,29 @@ std::string FullCarModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>&
   const std::string why = description().parameters().violation(params);
   if (!why.empty()) return why;
   try {
-    solveFullCarEquilibrium(FullCarParameters::fromVector(params, nominal_));
+    equilibrium(params);
   } catch (const std::runtime_error& e) {
     return e.what();
   }
   return "";
+}
+
+FullCarEquilibrium FullCarModel::equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const {
+  thread_local EquilibriumMemo memo;
+  EquilibriumMemo::Slot& slot = memo.slots[EquilibriumMemo::slotOf(id_, params)];
+  if (slot.model != id_ || slot.params.size() != params.size() ||
+      std::memcmp(slot.params.data(), params.data(), sizeof(double) * params.size()) != 0) {
+    slot.model = id_;
+    slot.params = params;
+    slot.error.clear();
+    try {
+      slot.equilibrium = solveFullCarEquilibrium(FullCarParameters::fromVector(params, nominal_));
+    } catch (const std::runtime_error& e) {
+      slot.error = e.what();
+    }
+  }
+  if (!slot.error.empty()) throw std::runtime_error(slot.error);
+  return slot.equilibrium;
 }
 
 std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params) const {
@@ -248,7 +297,7 @@ std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params)
     const FullCarParameters p = FullCarParameters::fromVector(params.col(q), nominal_);
     FullCarEquilibrium e;
     try {
-      e = solveFullCarEquilibrium(p);
+      e = equilibrium(params.col(q));
     } catch (const std::runtime_error& error) {
       throw std::invalid_argument(prefix + error.what());
     }

@@ -17,6 +17,8 @@
 // H y is not that point's own extension once the body pitches or rolls.
 #pragma once
 
+#include <cstdint>
+
 #include <memory>
 #include <string>
 #include <vector>
@@ -113,8 +115,15 @@ class FullCarModel : public MechanicalModel {
   const ContactRoad* contactRoad() const override { return road_.get(); }
 
  private:
+  // The equilibrium at params (a Newton solve), memoised per thread: the
+  // forecast asks invalidReason for each point and then prepares the same
+  // points on the same thread, so each point is solved once, not twice.
+  // Throws what solveFullCarEquilibrium throws.
+  FullCarEquilibrium equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const;
+
   FullCarParameters nominal_;
   Eigen::VectorXd nominal_vector_;
+  std::uint64_t id_;  // tells the memo's entries of two models apart
   Eigen::MatrixXd h_;
   std::shared_ptr<const ContactRoad> road_;
 };

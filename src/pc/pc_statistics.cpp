@@ -38,6 +38,23 @@ Eigen::VectorXd Histogram::centres() const {
   return 0.5 * (edges.head(bins) + edges.tail(bins));
 }
 
+int gemvBlockColumns(Eigen::Index rows, Eigen::Index terms) {
+  if (terms < 128) return static_cast<int>(terms);
+  return rows * static_cast<Eigen::Index>(sizeof(double)) < 32000 ? 16 : 4;
+}
+
+double gemvValue(const double* psi_row, Eigen::Index stride, const double* c, Eigen::Index terms,
+                 int block_cols) {
+  double value = 0.0;
+  for (Eigen::Index j2 = 0; j2 < terms; j2 += block_cols) {
+    const Eigen::Index end = std::min<Eigen::Index>(j2 + block_cols, terms);
+    double block = 0.0;
+    for (Eigen::Index j = j2; j < end; ++j) block += psi_row[j * stride] * c[j];
+    value += block;
+  }
+  return value;
+}
+
 Eigen::MatrixXd sampleGerms(const PolynomialBasis& basis, int draws, std::uint64_t seed) {
   if (draws < 0) throw std::invalid_argument("sampleGerms: negative number of draws");
   std::mt19937_64 rng(seed);

@@ -27,6 +27,18 @@ Histogram pcHistogram(const PolynomialBasis& basis, const Eigen::VectorXd& coeff
                       int draws, int bins, std::uint64_t seed, double lo = 0.0, double hi = 0.0,
                       double* outside_mass = nullptr);
 
+// How Eigen's column-major matrix-vector product `values = psi * c` (psi:
+// rows x terms) sums each value: from zero, term after term within blocks of
+// gemvBlockColumns(rows, terms) terms, each block's sum added to the running
+// value (one block when terms < 128). No fused multiply-add (a plain x86-64
+// build). gemvValue repeats that sum for one row, so a value it gives equals
+// the product's bit for bit (ParameterPdfSampler, HealthMonitor).
+int gemvBlockColumns(Eigen::Index rows, Eigen::Index terms);
+// psi_row: the row's `terms` values, `stride` apart (psi.data() + row,
+// psi.rows() for the matrix itself; 1 for a column of its transpose).
+double gemvValue(const double* psi_row, Eigen::Index stride, const double* c, Eigen::Index terms,
+                 int block_cols);
+
 // Samples the germ (rows = draws) with a seeded generator.
 Eigen::MatrixXd sampleGerms(const PolynomialBasis& basis, int draws, std::uint64_t seed);
 

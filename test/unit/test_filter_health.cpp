@@ -8,6 +8,7 @@
 #include <random>
 
 #include "pc_ekf/filter/health.h"
+#include "pc_ekf/pc/pc_statistics.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/model/scalar_growth_model.h"
 
@@ -115,6 +116,54 @@ TEST(Health, MassOutsideThePriorSupportIsMeasured) {
   EXPECT_NEAR(shifted.mass_outside_support[0], 0.5, 0.03);
   EXPECT_TRUE(shifted.support_exceeded);
   EXPECT_FALSE(shifted.band_nested);  // the band moved outside the previous one
+}
+
+// The mass outside the support skips the draws that its bounds show inside;
+// the count must still be the full product's (psi * c over all draws), for
+// expansions that straddle a bound by a little (a tolerance near its prior)
+// and by much.
+TEST(Health, MassOutsideCountsTheDrawsOfTheFullProduct) {
+  GrowthProblem p(0.5);  // uniform rate on [0.25, 0.75], order 3 (S = 4)
+  const HealthSettings settings;
+  const PolynomialBasis& basis = p.propagator->basis();
+  const Eigen::MatrixXd psi =
+      basis.evaluate(sampleGerms(basis, settings.support_draws, settings.seed));
+  const Eigen::MatrixXd prior = p.propagator->priorState().bottomRows(1);
+  HealthMonitor monitor(*p.propagator, settings);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int straddling = 0, few = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    Eigen::MatrixXd c = prior;
+    const double scale = trial % 2 ? 1e-3 : 0.1;  // near the prior, or far from it
+    for (Eigen::Index j = 0; j < c.cols(); ++j) c(0, j) += scale * u(rng);
+    const Eigen::VectorXd v = psi * c.row(0).transpose();
+    int expected = 0;
+    for (Eigen::Index d = 0; d < v.size(); ++d) expected += v[d] < 0.25 || v[d] > 0.75;
+    const HealthStatus h = monitor.assess(UpdateDiagnostics{}, ForecastReport{}, c);
+    ASSERT_EQ(h.mass_outside_support[0], expected / static_cast<double>(v.size())) << trial;
+    straddling += expected > 0;
+    few += expected > 0 && expected < 20;
+  }
+  EXPECT_GT(straddling, 100);  // the test exercises draws outside, a few and many
+  EXPECT_GT(few, 20);
+}
+
+// gemvValue repeats the product's sums: equal bit for bit, with one block of
+// terms (S < 128) and with several (S = 165).
+TEST(Health, GemvValueEqualsTheMatrixVectorProduct) {
+  for (int order : {2, 3}) {
+    const PolynomialBasis basis(std::vector<GermSpec>(8, GermSpec{GermFamily::kBeta, 2.0, 2.0}), order);
+    const Eigen::MatrixXd psi = basis.evaluate(sampleGerms(basis, 2000, 3));
+    std::mt19937_64 rng(order);
+    std::normal_distribution<double> n;
+    Eigen::VectorXd c(basis.size());
+    for (Eigen::Index j = 0; j < c.size(); ++j) c[j] = n(rng) / (1.0 + j);
+    const Eigen::VectorXd v = psi * c;
+    const int block_cols = gemvBlockColumns(psi.rows(), psi.cols());
+    EXPECT_EQ(block_cols, basis.size() < 128 ? basis.size() : 16);
+    for (Eigen::Index d = 0; d < psi.rows(); ++d) ASSERT_EQ(gemvValue(psi.data() + d, psi.rows(), c.data(), c.size(), block_cols), v[d]);
+  }
 }
 
 TEST(Health, PointsOutsideTheDomainAreReportedNotFatal) {
