@@ -2,7 +2,10 @@
 
 #include <cmath>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <sstream>
+#include <tuple>
 
 #include "pc_ekf/pc/orthonormal_family.h"
 #include "pc_ekf/pc/pc_statistics.h"
@@ -41,22 +44,51 @@ std::vector<std::string> HealthStatus::warnings() const {
   return w;
 }
 
-HealthMonitor::HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings)
-    : settings_(settings) {
-  const int n = propagator.parameterCount();
-  psi_ = propagator.basis().evaluate(
-      sampleGerms(propagator.basis(), settings.support_draws, settings.seed));
-  psi_t_ = psi_.transpose();
-  values_.resize(psi_.rows());
-  near_.resize(psi_.rows());
-  const auto& indices = propagator.basis().multiIndices();
+namespace {
+
+// The support draws' basis values (HealthMonitor::SupportDraws) depend only on
+// the basis, the draws and the seed: the filters of one run (full rate,
+// coherence, a deferred re-run's) share them instead of drawing them again.
+using SupportKey = std::tuple<std::vector<std::tuple<int, double, double>>,
+                              std::vector<std::vector<int>>, int, std::uint64_t>;
+
+std::shared_ptr<const HealthMonitor::SupportDraws> supportDraws(const PolynomialBasis& basis,
+                                                                int draws, std::uint64_t seed) {
+  std::vector<std::tuple<int, double, double>> germs;
+  for (const GermSpec& g : basis.germs()) germs.emplace_back(static_cast<int>(g.family), g.alpha, g.beta);
+  SupportKey key{std::move(germs), basis.multiIndices(), draws, seed};
+  static std::mutex mutex;
+  static std::vector<std::pair<SupportKey, std::shared_ptr<const HealthMonitor::SupportDraws>>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  for (const auto& [k, v] : cache) {
+    if (k == key) return v;
+  }
+  auto d = std::make_shared<HealthMonitor::SupportDraws>();
+  d->psi = basis.evaluate(sampleGerms(basis, draws, seed));
+  const Eigen::Index rows = d->psi.rows(), terms = d->psi.cols();
+  d->psi_t = d->psi.transpose();
+  d->padded = Eigen::MatrixXd::Zero(rows + HealthMonitor::SupportDraws::kPad, terms);
+  d->padded.topRows(rows) = d->psi;
+  d->max_abs = rows > 0 ? Eigen::VectorXd(d->psi.cwiseAbs().colwise().maxCoeff().transpose())
+                        : Eigen::VectorXd::Zero(terms);
+  const auto& indices = basis.multiIndices();
   for (std::size_t j = 0; j < indices.size(); ++j) {
     int degree = 0;
     for (int k : indices[j]) degree += k;
-    if (degree == 1) first_degree_.push_back(static_cast<Eigen::Index>(j));
+    if (degree == 1) d->first_degree.push_back(static_cast<Eigen::Index>(j));
   }
-  psi_max_abs_ = psi_.rows() > 0 ? Eigen::VectorXd(psi_.cwiseAbs().colwise().maxCoeff().transpose())
-                                 : Eigen::VectorXd::Zero(psi_.cols());
+  if (cache.size() >= 4) cache.erase(cache.begin());
+  cache.emplace_back(std::move(key), d);
+  return d;
+}
+
+}  // namespace
+
+HealthMonitor::HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings)
+    : settings_(settings),
+      draws_(supportDraws(propagator.basis(), settings.support_draws, settings.seed)) {
+  const int n = propagator.parameterCount();
+  near_.resize(draws_->psi.rows());
   lower_.resize(n);
   upper_.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -85,49 +117,79 @@ double HealthMonitor::nisBound(bool upper, int dof) {
 }
 
 double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i) {
-  if (psi_.rows() == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
+  const Eigen::MatrixXd& psi = draws_->psi;
+  const Eigen::VectorXd& max_abs = draws_->max_abs;
+  if (psi.rows() == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
   const double lower = lower_[i], upper = upper_[i], mean = coeffs(i, 0);
-  // Every draw's value lies in mean +- spread (|psi_j| <= psi_max_abs_j), up to the
+  // Every draw's value lies in mean +- spread (|psi_j| <= max_abs_j), up to the
   // dot product's round-off (bounded by S eps (|mean| + spread); 4x margin). When
   // that interval is inside the support, no draw is outside, which is the common
   // case once the data have narrowed the PDF.
   const Eigen::Index terms = coeffs.cols();
   double spread = 0.0;
-  for (Eigen::Index j = 1; j < terms; ++j) spread += std::abs(coeffs(i, j)) * psi_max_abs_[j];
+  for (Eigen::Index j = 1; j < terms; ++j) spread += std::abs(coeffs(i, j)) * max_abs[j];
   const double slack = 4.0 * static_cast<double>(terms) * std::numeric_limits<double>::epsilon() *
                        (std::abs(mean) + spread);
   if (mean - spread - slack >= lower && mean + spread + slack <= upper) return 0.0;
   // Otherwise per draw: the mean plus the first-degree terms (the bulk of a
   // parameter's spread, n products per draw instead of S) is within `rest`
   // (the higher terms' bounds) + slack of the value, so only the draws where
-  // that reaches a bound need the value itself, summed as psi_ * c sums it
+  // that reaches a bound need the value itself, summed as psi * c sums it
   // (gemvValue): the count is the full product's.
   double rest = spread;
   near_.setConstant(mean);
-  for (Eigen::Index j : first_degree_) {
-    near_ += coeffs(i, j) * psi_.col(j);
-    rest -= std::abs(coeffs(i, j)) * psi_max_abs_[j];
+  for (Eigen::Index j : draws_->first_degree) {
+    near_ += coeffs(i, j) * psi.col(j);
+    rest -= std::abs(coeffs(i, j)) * max_abs[j];
   }
   // `rest` by subtraction carries round-off of the order of spread eps: twice the slack covers it.
   const double margin = std::max(rest, 0.0) + 2.0 * slack;
   candidates_.clear();
-  for (Eigen::Index d = 0; d < psi_.rows(); ++d) {
+  for (Eigen::Index d = 0; d < psi.rows(); ++d) {
     if (!(near_[d] - margin >= lower && near_[d] + margin <= upper)) candidates_.push_back(d);
   }
+  // Many candidates (a parameter spread over many germs): left to fullProducts.
+  if (static_cast<Eigen::Index>(candidates_.size()) * 8 > psi.rows()) return -1.0;
+  row_ = coeffs.row(i);
+  const int block_cols = gemvBlockColumns(psi.rows(), terms);
   Eigen::Index outside = 0;
-  if (static_cast<Eigen::Index>(candidates_.size()) * 8 > psi_.rows()) {
-    // Many candidates (a parameter spread over many germs): the whole product.
-    values_.noalias() = psi_ * coeffs.row(i).transpose();
-    for (Eigen::Index d = 0; d < values_.size(); ++d) outside += (values_[d] < lower) || (values_[d] > upper);
-  } else {
-    row_ = coeffs.row(i);
-    const int block_cols = gemvBlockColumns(psi_.rows(), terms);
-    for (Eigen::Index d : candidates_) {
-      const double v = gemvValue(psi_t_.col(d).data(), 1, row_.data(), terms, block_cols);
-      outside += (v < lower) || (v > upper);
+  for (Eigen::Index d : candidates_) {
+    const double v = gemvValue(draws_->psi_t.col(d).data(), 1, row_.data(), terms, block_cols);
+    outside += (v < lower) || (v > upper);
+  }
+  return static_cast<double>(outside) / static_cast<double>(psi.rows());
+}
+
+void HealthMonitor::fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass) {
+  std::vector<Eigen::Index> rows;
+  for (Eigen::Index i = 0; i < mass.size(); ++i) {
+    if (mass[i] < 0.0) rows.push_back(i);
+  }
+  if (rows.empty()) return;
+  // All of them in one pass over the draws, a block of draws at a time (its
+  // basis values stay in cache for every parameter), each value summed as
+  // psi * c sums it (gemvOrderValues).
+  const Eigen::MatrixXd& padded = draws_->padded;
+  const int draws = static_cast<int>(draws_->psi.rows()), terms = static_cast<int>(coeffs.cols());
+  const int block_cols = gemvBlockColumns(draws, terms);
+  constexpr int kBlock = 256;
+  Eigen::MatrixXd c = coeffs(rows, Eigen::all).transpose();  // terms x rows, contiguous per row
+  std::vector<Eigen::Index> outside(rows.size(), 0);
+  std::vector<const double*> psi(static_cast<std::size_t>(terms));
+  double values[kBlock];
+  for (int d0 = 0; d0 < draws; d0 += kBlock) {
+    const int count = std::min(kBlock, draws - d0);
+    for (int j = 0; j < terms; ++j) psi[j] = padded.col(j).data() + d0;
+    for (std::size_t r = 0; r < rows.size(); ++r) {
+      gemvOrderValues(psi.data(), c.col(static_cast<Eigen::Index>(r)).data(), terms, block_cols,
+                      count, values);
+      const double lower = lower_[rows[r]], upper = upper_[rows[r]];
+      for (int b = 0; b < count; ++b) outside[r] += (values[b] < lower) || (values[b] > upper);
     }
   }
-  return static_cast<double>(outside) / static_cast<double>(psi_.rows());
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    mass[rows[r]] = static_cast<double>(outside[r]) / static_cast<double>(draws);
+  }
 }
 
 HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
@@ -163,6 +225,7 @@ HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const Foreca
   h.mass_outside_support = Eigen::VectorXd::Zero(coeffs.rows());
   if (!h.non_finite) {
     for (Eigen::Index i = 0; i < coeffs.rows(); ++i) h.mass_outside_support[i] = massOutside(coeffs, i);
+    fullProducts(coeffs, h.mass_outside_support);
     h.support_exceeded = (h.mass_outside_support.array() > settings_.support_mass_limit).any();
     const Eigen::VectorXd mean = pcMean(coeffs), sd = pcStddev(coeffs);
     if (last_mean_.size() == mean.size()) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <deque>
 #include <string>
+#include <memory>
 #include <vector>
 
 #include "pc_ekf/filter/kalman_update.h"
@@ -62,18 +63,28 @@ class HealthMonitor {
  private:
   // Cached chi-square bounds by degrees of freedom (quantiles are iterative).
   double nisBound(bool upper, int dof);
-  // Fraction of the germ draws whose value lies outside [lower_i, upper_i].
+  // Fraction of the germ draws whose value lies outside [lower_i, upper_i];
+  // -1 when most draws need the whole product (fullProducts fills those in).
   double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i);
+  void fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass);
 
+ public:
+  // The basis at the fixed germ draws of the support check.
+  struct SupportDraws {
+    static constexpr int kPad = 16;  // zero rows past the draws (gemvOrderValues reads ahead)
+    Eigen::MatrixXd psi;             // support_draws x S
+    Eigen::MatrixXd psi_t;           // its transpose: one draw's values contiguous
+    Eigen::MatrixXd padded;          // psi with kPad zero rows below
+    Eigen::VectorXd max_abs;         // per term, max over the draws of |psi_j|
+    std::vector<Eigen::Index> first_degree;  // the terms of total degree 1
+  };
+
+ private:
   HealthSettings settings_;
-  Eigen::MatrixXd psi_;           // support_draws x S basis values at fixed germ samples
-  Eigen::VectorXd psi_max_abs_;   // per term, max over the draws of |psi_j|
-  Eigen::MatrixXd psi_t_;         // its transpose: one draw's values contiguous
-  Eigen::VectorXd values_;        // support_draws, reused
-  Eigen::RowVectorXd row_;        // the coefficients of one quantity, contiguous (reused)
-  Eigen::VectorXd near_;          // support_draws: mean + first-degree terms (reused)
-  std::vector<Eigen::Index> first_degree_;  // the basis terms of total degree 1
-  std::vector<Eigen::Index> candidates_;  // draws the bounds do not show inside (reused)
+  std::shared_ptr<const SupportDraws> draws_;  // shared by monitors of the same basis
+  Eigen::VectorXd near_;                       // support_draws: mean + first-degree terms (reused)
+  Eigen::RowVectorXd row_;                     // one quantity's coefficients, contiguous (reused)
+  std::vector<Eigen::Index> candidates_;       // draws the bounds do not show inside (reused)
   Eigen::VectorXd lower_, upper_;
   std::vector<double> bound_cache_[2];  // [lower, upper][dof], NaN = not yet computed
   std::deque<std::pair<double, int>> window_;  // (nis, channels)

@@ -4,6 +4,7 @@
 #include <future>
 #include <optional>
 #include <stdexcept>
+#include <thread>
 
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
@@ -58,7 +59,7 @@ PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis
 std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {
   const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
   if (!coeffs.allFinite()) return {};
-  return s->histograms(coeffs);
+  return s->histograms(coeffs, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
 }
 
 Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {

@@ -1,6 +1,7 @@
 #include "pc_ekf/pc/pc_statistics.h"
 
 #include <algorithm>
+#include <cstring>
 #include <cmath>
 #include <random>
 #include <stdexcept>
@@ -55,18 +56,64 @@ double gemvValue(const double* psi_row, Eigen::Index stride, const double* c, Ei
   return value;
 }
 
+namespace {
+constexpr int kLanes = 16;  // draws accumulated in registers at once
+}  // namespace
+
+// out[b] = sum_j psi[j][b] c[j] for `count` draws, summed as
+// Eigen's column-major matrix-vector product sums pcHistogram's
+// `basis.evaluate(germs) * coefficients`: per draw from zero, term after term
+// within blocks of `block_cols` terms, the block sums added to the running
+// result (one block when S < 128). No fused multiply-add in either (a plain
+// x86-64 build), so the bits agree.
+// GCC vector extensions: one AVX2 register per four draws where the CPU has
+// it (the "avx2" clone), two SSE2 registers otherwise; same bits either way.
+typedef double Lanes4 __attribute__((vector_size(32)));
+#if defined(__x86_64__) && !defined(__clang__)
+__attribute__((target_clones("avx2", "default")))
+#endif
+void gemvOrderValues(const double* const* psi, const double* c, int terms, int block_cols,
+                     int count, double* out) {
+  // Named accumulators (not arrays): GCC keeps them in registers.
+  for (int b0 = 0; b0 < count; b0 += kLanes) {
+    Lanes4 r0 = {}, r1 = {}, r2 = {}, r3 = {};
+    for (int j2 = 0; j2 < terms; j2 += block_cols) {
+      const int jend = std::min(j2 + block_cols, terms);
+      Lanes4 a0 = {}, a1 = {}, a2 = {}, a3 = {};
+      for (int j = j2; j < jend; ++j) {
+        const Lanes4 cj = {c[j], c[j], c[j], c[j]};
+        const double* p = psi[j] + b0;
+        Lanes4 p0, p1, p2, p3;
+        std::memcpy(&p0, p, sizeof p0);
+        std::memcpy(&p1, p + 4, sizeof p1);
+        std::memcpy(&p2, p + 8, sizeof p2);
+        std::memcpy(&p3, p + 12, sizeof p3);
+        a0 += p0 * cj;
+        a1 += p1 * cj;
+        a2 += p2 * cj;
+        a3 += p3 * cj;
+      }
+      r0 += a0;
+      r1 += a1;
+      r2 += a2;
+      r3 += a3;
+    }
+    double res[kLanes];
+    std::memcpy(res, &r0, sizeof r0);
+    std::memcpy(res + 4, &r1, sizeof r1);
+    std::memcpy(res + 8, &r2, sizeof r2);
+    std::memcpy(res + 12, &r3, sizeof r3);
+    std::memcpy(out + b0, res,
+                static_cast<std::size_t>(std::min(kLanes, count - b0)) * sizeof(double));
+  }
+}
+
 Eigen::MatrixXd sampleGerms(const PolynomialBasis& basis, int draws, std::uint64_t seed) {
   if (draws < 0) throw std::invalid_argument("sampleGerms: negative number of draws");
   std::mt19937_64 rng(seed);
   Eigen::MatrixXd samples(draws, basis.dimension());
   for (int i = 0; i < draws; ++i) {
-    for (int d = 0; d < basis.dimension(); ++d) {
-      // 53 random bits, offset by half a unit: u is strictly inside (0, 1), and
-      // unlike std::uniform_real_distribution the stream is the same on every
-      // standard library.
-      const double u = (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
-      samples(i, d) = basis.family(d).inverseCdf(u);
-    }
+    for (int d = 0; d < basis.dimension(); ++d) samples(i, d) = drawGerm(rng, basis.family(d));
   }
   return samples;
 }

@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <cstdint>
+#include <random>
 
 #include "pc_ekf/pc/polynomial_basis.h"
 
@@ -39,7 +40,23 @@ int gemvBlockColumns(Eigen::Index rows, Eigen::Index terms);
 double gemvValue(const double* psi_row, Eigen::Index stride, const double* c, Eigen::Index terms,
                  int block_cols);
 
-// Samples the germ (rows = draws) with a seeded generator.
+// values[b] = the product's value for `count` draws (psi[j]: term j's values
+// at the draws, contiguous; c: the S coefficients), summed as gemvValue sums
+// them, four draws per AVX2 register where the CPU has it. psi[j] must be
+// readable 16 values past `count` (rows padded).
+void gemvOrderValues(const double* const* psi, const double* c, int terms, int block_cols,
+                     int count, double* values);
+
+// One germ value of sampleGerms's stream: 53 random bits, offset by half a
+// unit (u strictly inside (0, 1), the same stream on every standard library),
+// through the family's inverse CDF.
+inline double drawGerm(std::mt19937_64& rng, const OrthonormalFamily& family) {
+  const double u = (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
+  return family.inverseCdf(u);
+}
+
+// Samples the germ (rows = draws) with a seeded generator: draw after draw,
+// germ after germ of drawGerm.
 Eigen::MatrixXd sampleGerms(const PolynomialBasis& basis, int draws, std::uint64_t seed);
 
 }  // namespace pc_ekf

@@ -29,7 +29,8 @@ class ParameterPdfSampler {
                       int parameters);
   // Histogram of each row of `coefficients` (quantities x S terms), binned
   // over its sample range; none when a coefficient is not finite.
-  std::vector<Histogram> histograms(const Eigen::MatrixXd& coefficients) const;
+  // `threads` share the work (the same numbers for any count).
+  std::vector<Histogram> histograms(const Eigen::MatrixXd& coefficients, int threads = 1) const;
   int draws() const { return draws_; }
   int bins() const { return bins_; }
 

@@ -162,7 +162,21 @@ TEST(Health, GemvValueEqualsTheMatrixVectorProduct) {
     const Eigen::VectorXd v = psi * c;
     const int block_cols = gemvBlockColumns(psi.rows(), psi.cols());
     EXPECT_EQ(block_cols, basis.size() < 128 ? basis.size() : 16);
-    for (Eigen::Index d = 0; d < psi.rows(); ++d) ASSERT_EQ(gemvValue(psi.data() + d, psi.rows(), c.data(), c.size(), block_cols), v[d]);
+    for (Eigen::Index d = 0; d < psi.rows(); ++d) {
+      ASSERT_EQ(gemvValue(psi.data() + d, psi.rows(), c.data(), c.size(), block_cols), v[d]);
+    }
+    // The lanes' version over blocks of 48 draws (rows padded by 16).
+    Eigen::MatrixXd padded = Eigen::MatrixXd::Zero(psi.rows() + 16, psi.cols());
+    padded.topRows(psi.rows()) = psi;
+    std::vector<const double*> columns(psi.cols());
+    std::vector<double> values(48);
+    for (Eigen::Index d0 = 0; d0 < psi.rows(); d0 += 48) {
+      const int count = static_cast<int>(std::min<Eigen::Index>(48, psi.rows() - d0));
+      for (Eigen::Index j = 0; j < psi.cols(); ++j) columns[j] = padded.col(j).data() + d0;
+      gemvOrderValues(columns.data(), c.data(), static_cast<int>(c.size()), block_cols, count,
+                      values.data());
+      for (int b = 0; b < count; ++b) ASSERT_EQ(values[b], v[d0 + b]);
+    }
   }
 }
 
