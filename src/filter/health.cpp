@@ -64,12 +64,13 @@ std::shared_ptr<const HealthMonitor::SupportDraws> supportDraws(const Polynomial
     if (k == key) return v;
   }
   auto d = std::make_shared<HealthMonitor::SupportDraws>();
-  d->psi = basis.evaluate(sampleGerms(basis, draws, seed));
-  const Eigen::Index rows = d->psi.rows(), terms = d->psi.cols();
-  d->psi_t = d->psi.transpose();
+  const Eigen::MatrixXd psi = basis.evaluate(sampleGerms(basis, draws, seed));
+  const Eigen::Index rows = psi.rows(), terms = psi.cols();
+  d->draws = rows;
+  d->psi_t = psi.transpose();
   d->padded = Eigen::MatrixXd::Zero(rows + HealthMonitor::SupportDraws::kPad, terms);
-  d->padded.topRows(rows) = d->psi;
-  d->max_abs = rows > 0 ? Eigen::VectorXd(d->psi.cwiseAbs().colwise().maxCoeff().transpose())
+  d->padded.topRows(rows) = psi;
+  d->max_abs = rows > 0 ? Eigen::VectorXd(psi.cwiseAbs().colwise().maxCoeff().transpose())
                         : Eigen::VectorXd::Zero(terms);
   const auto& indices = basis.multiIndices();
   for (std::size_t j = 0; j < indices.size(); ++j) {
@@ -88,7 +89,7 @@ HealthMonitor::HealthMonitor(const PcPropagator& propagator, const HealthSetting
     : settings_(settings),
       draws_(supportDraws(propagator.basis(), settings.support_draws, settings.seed)) {
   const int n = propagator.parameterCount();
-  near_.resize(draws_->psi.rows());
+  near_.resize(draws_->draws);
   lower_.resize(n);
   upper_.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -117,9 +118,9 @@ double HealthMonitor::nisBound(bool upper, int dof) {
 }
 
 double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i) {
-  const Eigen::MatrixXd& psi = draws_->psi;
+  const Eigen::Index draws = draws_->draws;
   const Eigen::VectorXd& max_abs = draws_->max_abs;
-  if (psi.rows() == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
+  if (draws == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
   const double lower = lower_[i], upper = upper_[i], mean = coeffs(i, 0);
   // Every draw's value lies in mean +- spread (|psi_j| <= max_abs_j), up to the
   // dot product's round-off (bounded by S eps (|mean| + spread); 4x margin). When
@@ -139,25 +140,25 @@ double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i)
   double rest = spread;
   near_.setConstant(mean);
   for (Eigen::Index j : draws_->first_degree) {
-    near_ += coeffs(i, j) * psi.col(j);
+    near_ += coeffs(i, j) * draws_->padded.col(j).head(draws);
     rest -= std::abs(coeffs(i, j)) * max_abs[j];
   }
   // `rest` by subtraction carries round-off of the order of spread eps: twice the slack covers it.
   const double margin = std::max(rest, 0.0) + 2.0 * slack;
   candidates_.clear();
-  for (Eigen::Index d = 0; d < psi.rows(); ++d) {
+  for (Eigen::Index d = 0; d < draws; ++d) {
     if (!(near_[d] - margin >= lower && near_[d] + margin <= upper)) candidates_.push_back(d);
   }
   // Many candidates (a parameter spread over many germs): left to fullProducts.
-  if (static_cast<Eigen::Index>(candidates_.size()) * 8 > psi.rows()) return -1.0;
+  if (static_cast<Eigen::Index>(candidates_.size()) * 8 > draws) return -1.0;
   row_ = coeffs.row(i);
-  const int block_cols = gemvBlockColumns(psi.rows(), terms);
+  const int block_cols = gemvBlockColumns(draws, terms);
   Eigen::Index outside = 0;
   for (Eigen::Index d : candidates_) {
     const double v = gemvValue(draws_->psi_t.col(d).data(), 1, row_.data(), terms, block_cols);
     outside += (v < lower) || (v > upper);
   }
-  return static_cast<double>(outside) / static_cast<double>(psi.rows());
+  return static_cast<double>(outside) / static_cast<double>(draws);
 }
 
 void HealthMonitor::fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass) {
@@ -170,7 +171,7 @@ void HealthMonitor::fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd&
   // basis values stay in cache for every parameter), each value summed as
   // psi * c sums it (gemvOrderValues).
   const Eigen::MatrixXd& padded = draws_->padded;
-  const int draws = static_cast<int>(draws_->psi.rows()), terms = static_cast<int>(coeffs.cols());
+  const int draws = static_cast<int>(draws_->draws), terms = static_cast<int>(coeffs.cols());
   const int block_cols = gemvBlockColumns(draws, terms);
   constexpr int kBlock = 256;
   Eigen::MatrixXd c = coeffs(rows, Eigen::all).transpose();  // terms x rows, contiguous per row

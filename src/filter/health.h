@@ -55,6 +55,16 @@ double chiSquareQuantile(double probability, double dof);
 
 class HealthMonitor {
  public:
+  // The basis at the fixed germ draws of the support check.
+  struct SupportDraws {
+    static constexpr int kPad = 16;  // zero rows past the draws (gemvOrderValues reads ahead)
+    Eigen::Index draws = 0;
+    Eigen::MatrixXd padded;          // (draws + kPad) x S: psi_j at the draws, then zeros
+    Eigen::MatrixXd psi_t;           // S x draws: one draw's values contiguous
+    Eigen::VectorXd max_abs;         // per term, max over the draws of |psi_j|
+    std::vector<Eigen::Index> first_degree;  // the terms of total degree 1
+  };
+
   HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings);
   HealthStatus assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
                       const Eigen::MatrixXd& parameter_coeffs);
@@ -67,17 +77,6 @@ class HealthMonitor {
   // -1 when most draws need the whole product (fullProducts fills those in).
   double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i);
   void fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass);
-
- public:
-  // The basis at the fixed germ draws of the support check.
-  struct SupportDraws {
-    static constexpr int kPad = 16;  // zero rows past the draws (gemvOrderValues reads ahead)
-    Eigen::MatrixXd psi;             // support_draws x S
-    Eigen::MatrixXd psi_t;           // its transpose: one draw's values contiguous
-    Eigen::MatrixXd padded;          // psi with kPad zero rows below
-    Eigen::VectorXd max_abs;         // per term, max over the draws of |psi_j|
-    std::vector<Eigen::Index> first_degree;  // the terms of total degree 1
-  };
 
  private:
   HealthSettings settings_;
