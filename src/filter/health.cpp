@@ -193,6 +193,15 @@ void HealthMonitor::fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd&
   }
 }
 
+void HealthMonitor::assessSupport(const Eigen::MatrixXd& coeffs, HealthStatus* h) {
+  h->mass_outside_support = Eigen::VectorXd::Zero(coeffs.rows());
+  h->support_exceeded = false;
+  if (h->non_finite) return;
+  for (Eigen::Index i = 0; i < coeffs.rows(); ++i) h->mass_outside_support[i] = massOutside(coeffs, i);
+  fullProducts(coeffs, h->mass_outside_support);
+  h->support_exceeded = (h->mass_outside_support.array() > settings_.support_mass_limit).any();
+}
+
 HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
                                    const Eigen::MatrixXd& coeffs) {
   HealthStatus h;
@@ -223,11 +232,8 @@ HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const Foreca
     h.nis_window_outside = static_cast<int>(window_.size()) == settings_.nis_window &&
                            (h.nis_window_mean < h.window_lower || h.nis_window_mean > h.window_upper);
   }
-  h.mass_outside_support = Eigen::VectorXd::Zero(coeffs.rows());
+  if (settings_.support_every_sample) assessSupport(coeffs, &h);
   if (!h.non_finite) {
-    for (Eigen::Index i = 0; i < coeffs.rows(); ++i) h.mass_outside_support[i] = massOutside(coeffs, i);
-    fullProducts(coeffs, h.mass_outside_support);
-    h.support_exceeded = (h.mass_outside_support.array() > settings_.support_mass_limit).any();
     const Eigen::VectorXd mean = pcMean(coeffs), sd = pcStddev(coeffs);
     if (last_mean_.size() == mean.size()) {
       h.band_nested = ((mean - sd).array() >= (last_mean_ - last_std_).array() - 1e-15).all() &&

@@ -20,6 +20,10 @@ struct HealthSettings {
   int nis_window = 10;
   double nis_confidence = 0.99;  // two-sided
   int support_draws = 2000;      // germ samples for the outside-support mass
+  // false: assess() leaves mass_outside_support empty and support_exceeded
+  // false; a caller that needs them for some samples only (estimate_offline:
+  // the last) asks with assessSupport(). Nothing else depends on them.
+  bool support_every_sample = true;
   double support_mass_limit = 0.05;
   std::uint64_t seed = 11;
   // Relative leave-one-out error of the forecast's projection above which a
@@ -34,7 +38,7 @@ struct HealthStatus {
   double nis_window_mean = 0.0;
   double window_lower = 0.0, window_upper = 0.0;
   bool nis_window_outside = false;  // drives health
-  Eigen::VectorXd mass_outside_support;  // per parameter
+  Eigen::VectorXd mass_outside_support;  // per parameter (empty: not assessed)
   bool support_exceeded = false;         // any mass above support_mass_limit (warning)
   bool non_finite = false;               // drives health
   bool forecast_failed = false;          // drives health
@@ -68,6 +72,9 @@ class HealthMonitor {
   HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings);
   HealthStatus assess(const UpdateDiagnostics& update, const ForecastReport& forecast,
                       const Eigen::MatrixXd& parameter_coeffs);
+  // The mass outside the support and support_exceeded, into h (its other
+  // fields untouched); nothing when h says the state is not finite.
+  void assessSupport(const Eigen::MatrixXd& parameter_coeffs, HealthStatus* h);
   void reset();
 
  private:

@@ -95,12 +95,13 @@ EstimatorConfig withUncertain(EstimatorConfig c, const std::vector<std::string>&
 
 std::shared_ptr<const ParameterPdfSampler> makePdfSampler(const EstimatorConfig& c,
                                                           const PolynomialBasis& basis,
-                                                          int parameters) {
+                                                          int parameters, int threads) {
+  const PdfSetupThreads t{std::max(1, threads)};
   if (c.pdf.shared_draws) {
-    return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+    return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed, t);
   }
   return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed,
-                                                     parameters);
+                                                     parameters, t);
 }
 
 NoiseModel makeNoiseModel(const EstimatorConfig& c) {

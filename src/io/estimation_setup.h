@@ -33,10 +33,11 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c);
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c);
 NoiseModel makeNoiseModel(const EstimatorConfig& c);
 // The PDF sampler of pdf: (draws, bins, seed; shared or per-parameter draws)
-// for `parameters` rows in `basis`.
+// for `parameters` rows in `basis`, drawn on `threads` threads (the same
+// draws for any count).
 std::shared_ptr<const ParameterPdfSampler> makePdfSampler(const EstimatorConfig& c,
                                                           const PolynomialBasis& basis,
-                                                          int parameters);
+                                                          int parameters, int threads = 1);
 // The grid: section (and pdf.bins) as settings of the exact posterior.
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c);
 std::vector<int> channelIndices(const EstimatorConfig& c);

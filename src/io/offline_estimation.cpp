@@ -11,6 +11,7 @@
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/pc/in_parts.h"
 #include "pc_ekf/pc/pdf_sampler.h"
 
 namespace pc_ekf {
@@ -53,13 +54,13 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
 using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
 PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis) {
   return std::async(std::launch::async, [&c, basis = std::move(basis)] {
-    return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()));
+    return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()), machineThreads());
   });
 }
 std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {
   const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
   if (!coeffs.allFinite()) return {};
-  return s->histograms(coeffs, static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+  return s->histograms(coeffs, machineThreads());
 }
 
 Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
@@ -93,8 +94,11 @@ CoherenceFuture startCoherenceFilter(const EstimatorConfig& c, const Measurement
     none.set_value(std::nullopt);
     return none.get_future();
   }
-  return std::async(std::launch::async, [dec = std::move(dec), prop = prop.withThreads(1), settings] {
-    OneStepFilter coarse(prop, settings);
+  OneStepSettings coarse_settings = settings;  // it is asked for the mean and std only
+  coarse_settings.health.support_every_sample = false;
+  return std::async(std::launch::async, [dec = std::move(dec), prop = prop.withThreads(1),
+                                         coarse_settings] {
+    OneStepFilter coarse(prop, coarse_settings);
     StepResult d;
     for (const Measurement& m : dec) d = coarse.process(m);
     return std::optional<StepResult>(std::move(d));
@@ -107,7 +111,10 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   const PdfSamplerFuture pdf_sampler = startPdfSampler(
       c, PolynomialBasis(ParameterMapping(*model, c.uncertain).germs(), c.pc_order, c.pc_truncation));
   const std::shared_ptr<const PcPropagator> prop = makePropagator(c, model);
-  const OneStepSettings settings = makeOneStepSettings(c);
+  // The mass outside the support feeds nothing but the last sample's
+  // warnings here: assessed for that sample only.
+  OneStepSettings settings = makeOneStepSettings(c);
+  settings.health.support_every_sample = false;
   CoherenceFuture coherence = startCoherenceFilter(c, series, *prop, settings);
   OneStepFilter filter(prop, settings);
   StepResult last;
@@ -126,6 +133,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
     r->damped_updates += last.damping < 1.0;
     r->reopened += last.reopened;
   }
+  filter.assessSupport(&last);
   r->rejected_samples = filter.rejected();
   r->relinearized = last.restarts;
   r->loo_channels = c.model_type->channelNames();

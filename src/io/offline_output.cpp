@@ -2,6 +2,7 @@
 // comes from nlohmann::json: numbers in their shortest round-trip form (a
 // reader gets the same double), strings escaped as JSON requires, non-finite
 // numbers as null.
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -12,6 +13,7 @@
 
 #include "pc_ekf/io/number_text.h"
 #include "pc_ekf/io/offline_estimation.h"
+#include "pc_ekf/pc/in_parts.h"
 
 namespace pc_ekf {
 namespace {
@@ -41,6 +43,32 @@ std::ofstream openOutput(const std::string& path) {
   if (!out) throw std::runtime_error(path + ": cannot write");
   out << std::setprecision(std::numeric_limits<double>::max_digits10);
   return out;
+}
+
+// One row of samples.csv (appendG17: the stream's %.17g digits).
+void appendSampleRow(std::string& text, const SampleRecord& s, std::size_t loo_channels, int terms) {
+  text += std::to_string(s.index);
+  text += ',';
+  appendG17(text, s.time);
+  for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
+    text += ',';
+    appendG17(text, s.mean[i]);
+    text += ',';
+    appendG17(text, s.stddev[i]);
+    for (int j = 0; j < terms; ++j) {
+      text += ',';
+      appendG17(text, s.coefficients(i, j));
+    }
+  }
+  text += ',';
+  appendG17(text, s.nis);
+  for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) text += flag ? ",1" : ",0";
+  // Empty cells: no leave-one-out error for this sample (a point left out).
+  for (std::size_t i = 0; i < loo_channels; ++i) {
+    text += ',';
+    if (static_cast<std::size_t>(s.loo_error.size()) == loo_channels) appendG17(text, s.loo_error[i]);
+  }
+  text += '\n';
 }
 
 }  // namespace
@@ -117,33 +145,17 @@ void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
   text += ",nis,nis_window_outside,band_nested,healthy";
   for (const auto& channel : r.loo_channels) text += ",loo_" + channel;
   text += '\n';
-  for (const SampleRecord& s : r.records) {
-    text += std::to_string(s.index);
-    text += ',';
-    appendG17(text, s.time);
-    for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
-      text += ',';
-      appendG17(text, s.mean[i]);
-      text += ',';
-      appendG17(text, s.stddev[i]);
-      for (int j = 0; j < terms; ++j) {
-        text += ',';
-        appendG17(text, s.coefficients(i, j));
-      }
-    }
-    text += ',';
-    appendG17(text, s.nis);
-    for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) text += flag ? ",1" : ",0";
-    // Empty cells: no leave-one-out error for this sample (a point left out).
-    for (std::size_t i = 0; i < r.loo_channels.size(); ++i) {
-      text += ',';
-      if (static_cast<std::size_t>(s.loo_error.size()) == r.loo_channels.size())
-        appendG17(text, s.loo_error[i]);
-    }
-    text += '\n';
-  }
+  // Rows formatted in parts on the machine's threads, joined in order.
+  const int rows = static_cast<int>(r.records.size());
+  const int parts = std::max(1, std::min(machineThreads(), rows / 16));
+  std::vector<std::string> part_text(static_cast<std::size_t>(parts));
+  inNumberedParts(rows, parts, [&](int part, int begin, int end) {
+    std::string& out = part_text[static_cast<std::size_t>(part)];
+    for (int k = begin; k < end; ++k) appendSampleRow(out, r.records[k], r.loo_channels.size(), terms);
+  });
   std::ofstream samples = openOutput(dir + "/samples.csv");
   samples << text;
+  for (const std::string& part : part_text) samples << part;
 
   text = "parameter,bin_low,bin_high,density\n";
   for (std::size_t i = 0; i < r.pdfs.size() && i < r.parameters.size(); ++i) {

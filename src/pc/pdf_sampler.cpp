@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <thread>
+
+#include "pc_ekf/pc/in_parts.h"
 
 namespace pc_ekf {
 namespace {
@@ -21,19 +23,6 @@ __attribute__((target_clones("avx2", "default")))
 #endif
 void multiply(const double* a, const double* b, int count, double* out) {
   for (int i = 0; i < count; ++i) out[i] = a[i] * b[i];
-}
-
-// job(begin, end) over [0, count) in `threads` contiguous parts, the first
-// on this thread.
-template <typename Job>
-void inParts(int count, int threads, const Job& job) {
-  const int parts = std::max(1, std::min(threads, count));
-  std::vector<std::thread> helpers;
-  for (int t = 1; t < parts; ++t) {
-    helpers.emplace_back([&job, t, parts, count] { job(count * t / parts, count * (t + 1) / parts); });
-  }
-  job(0, count / parts);
-  for (std::thread& h : helpers) h.join();
 }
 
 // pcHistogram's binning over the sample range (lo = hi = 0 there).
@@ -63,7 +52,7 @@ Histogram binned(const Eigen::Ref<const Eigen::VectorXd>& values, int bins) {
 }  // namespace
 
 ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins,
-                                         std::uint64_t seed)
+                                         std::uint64_t seed, PdfSetupThreads threads)
     : terms_(basis.size()), draws_(draws), bins_(bins) {
   if (draws < 1 || bins < 1) {
     throw std::invalid_argument("ParameterPdfSampler: need draws, bins >= 1 (got " +
@@ -73,9 +62,9 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
   // OrthonormalFamily::evaluate's recurrence with its constants taken out of
   // the loop (same operations in the same order), on the germ values of
   // sampleGerms's stream (drawGerm), without a draws x n matrix of them.
-  // Rows padded by kPad zeros.
+  // Rows padded by kPad zeros (a fresh LargeArray is zero).
   const std::size_t stride = static_cast<std::size_t>(draws) + kPad;
-  univariate_.assign(static_cast<std::size_t>(n) * p * stride, 0.0);
+  univariate_ = LargeArray(static_cast<std::size_t>(n) * p * stride);
   std::vector<std::vector<double>> a(n, std::vector<double>(p + 1)), sb(n, std::vector<double>(p + 1));
   for (int d = 0; d < n; ++d) {
     const OrthonormalFamily& f = basis.family(d);
@@ -83,29 +72,36 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
     for (int k = 1; k <= p; ++k) sb[d][k] = std::sqrt(f.recurrenceB(k));
   }
   // The germ values in chunks of draws (sampleGerms's order within and across
-  // chunks), then each row of the chunk in turn: small memory, sequential writes.
-  std::mt19937_64 rng(seed);
+  // chunks), then each row of the chunk in turn: small memory, sequential
+  // writes. The threads take contiguous runs of chunks, each with the stream
+  // advanced to its first draw (one generator output per germ value), so the
+  // values do not depend on the thread count.
   constexpr int kChunk = 1024;
-  std::vector<double> chunk(static_cast<std::size_t>(kChunk) * n);  // draw-major
-  for (int q0 = 0; q0 < draws; q0 += kChunk) {
-    const int count = std::min(kChunk, draws - q0);
-    for (int q = 0; q < count; ++q) {
-      for (int d = 0; d < n; ++d) chunk[static_cast<std::size_t>(q) * n + d] = drawGerm(rng, basis.family(d));
-    }
-    for (int d = 0; d < n && p >= 1; ++d) {
-      double* first = univariate_.data() + static_cast<std::size_t>(d) * p * stride + q0;
-      for (int q = 0; q < count; ++q) first[q] = (chunk[static_cast<std::size_t>(q) * n + d] - a[d][0]) / sb[d][1];
-      for (int k = 2; k <= p; ++k) {
-        double* row = first + (k - 1) * stride;
-        const double* prev = row - stride;
-        for (int q = 0; q < count; ++q) {
-          const double x = chunk[static_cast<std::size_t>(q) * n + d];
-          const double before = k == 2 ? 1.0 : prev[q - static_cast<std::ptrdiff_t>(stride)];
-          row[q] = ((x - a[d][k - 1]) * prev[q] - sb[d][k - 1] * before) / sb[d][k];
+  const int chunks = (draws + kChunk - 1) / kChunk;
+  inParts(chunks, threads.count, [&](int chunk_begin, int chunk_end) {
+    std::mt19937_64 rng(seed);
+    rng.discard(static_cast<unsigned long long>(chunk_begin) * kChunk * n);
+    std::vector<double> chunk(static_cast<std::size_t>(kChunk) * n);  // draw-major
+    for (int q0 = chunk_begin * kChunk; q0 < std::min(draws, chunk_end * kChunk); q0 += kChunk) {
+      const int count = std::min(kChunk, draws - q0);
+      for (int q = 0; q < count; ++q) {
+        for (int d = 0; d < n; ++d) chunk[static_cast<std::size_t>(q) * n + d] = drawGerm(rng, basis.family(d));
+      }
+      for (int d = 0; d < n && p >= 1; ++d) {
+        double* first = univariate_.data() + static_cast<std::size_t>(d) * p * stride + q0;
+        for (int q = 0; q < count; ++q) first[q] = (chunk[static_cast<std::size_t>(q) * n + d] - a[d][0]) / sb[d][1];
+        for (int k = 2; k <= p; ++k) {
+          double* row = first + (k - 1) * stride;
+          const double* prev = row - stride;
+          for (int q = 0; q < count; ++q) {
+            const double x = chunk[static_cast<std::size_t>(q) * n + d];
+            const double before = k == 2 ? 1.0 : prev[q - static_cast<std::ptrdiff_t>(stride)];
+            row[q] = ((x - a[d][k - 1]) * prev[q] - sb[d][k - 1] * before) / sb[d][k];
+          }
         }
       }
     }
-  }
+  });
   for (const std::vector<int>& index : basis.multiIndices()) {
     std::vector<int> rows;
     for (int d = 0; d < n; ++d) {
@@ -116,9 +112,19 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
 }
 
 ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins,
-                                         std::uint64_t seed, int parameters)
+                                         std::uint64_t seed, int parameters, PdfSetupThreads threads)
     : terms_(basis.size()), draws_(draws), bins_(bins) {
-  for (int i = 0; i < parameters; ++i) per_parameter_.emplace_back(basis, draws, bins, seed + i);
+  // Checked here: a helper thread's exception would end the process.
+  if (draws < 1 || bins < 1 || parameters < 0) {
+    throw std::invalid_argument("ParameterPdfSampler: need draws, bins >= 1 and parameters >= 0 (got " +
+                                std::to_string(draws) + ", " + std::to_string(bins) + ", " +
+                                std::to_string(parameters) + ")");
+  }
+  std::vector<std::optional<ParameterPdfSampler>> made(static_cast<std::size_t>(parameters));
+  inParts(parameters, threads.count, [&](int begin, int end) {
+    for (int i = begin; i < end; ++i) made[i].emplace(basis, draws, bins, seed + i);
+  });
+  for (std::optional<ParameterPdfSampler>& m : made) per_parameter_.push_back(std::move(*m));
 }
 
 std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& coefficients,
@@ -148,7 +154,8 @@ std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& co
   // Eigen's block heuristic for pcHistogram's draws x S product (lhs stride = draws).
   const int block_cols = gemvBlockColumns(draws_, terms_);
   // Column per quantity, padded so that a block's last lanes stay inside.
-  Eigen::MatrixXd values(draws_ + kPad, quantities);
+  LargeArray values_buffer(static_cast<std::size_t>(draws_ + kPad) * quantities);
+  Eigen::Map<Eigen::MatrixXd> values(values_buffer.data(), draws_ + kPad, quantities);
   // Coefficients row by row, contiguous.
   std::vector<double> rows(static_cast<std::size_t>(quantities) * terms_);
   for (Eigen::Index r = 0; r < quantities; ++r) {

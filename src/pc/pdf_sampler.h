@@ -12,21 +12,29 @@
 #include <cstdint>
 #include <vector>
 
+#include "pc_ekf/pc/large_array.h"
 #include "pc_ekf/pc/pc_statistics.h"
 #include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 
+// Threads sharing a ParameterPdfSampler's construction (the same numbers for
+// any count).
+struct PdfSetupThreads {
+  int count = 1;
+};
+
 class ParameterPdfSampler {
  public:
   // The draws are sampleGerms(basis, draws, seed): pcHistogram(basis, c,
   // draws, bins, seed) of each parameter gives histograms()'s numbers.
-  ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins, std::uint64_t seed);
+  ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins, std::uint64_t seed,
+                      PdfSetupThreads threads = {});
   // Independent draws per parameter (pdf.shared_draws: false): row i of
   // histograms() uses sampleGerms(basis, draws, seed + i), as pcHistogram(...,
   // seed + i) does; `parameters` rows, each at the cost of a shared call.
   ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins, std::uint64_t seed,
-                      int parameters);
+                      int parameters, PdfSetupThreads threads = {});
   // Histogram of each row of `coefficients` (quantities x S terms), binned
   // over its sample range; none when a coefficient is not finite.
   // `threads` share the work (the same numbers for any count).
@@ -40,7 +48,7 @@ class ParameterPdfSampler {
   int bins_;
   // Row (d * order + k - 1): psi_k of germ d at every draw (psi_0 = 1 is exact
   // and left out of the products, which does not change their bits).
-  std::vector<double> univariate_;
+  LargeArray univariate_;
   std::vector<std::vector<int>> factors_;  // per term: rows of univariate_, ascending d
   std::vector<ParameterPdfSampler> per_parameter_;  // independent draws: one per row
 };

@@ -118,6 +118,34 @@ TEST(Health, MassOutsideThePriorSupportIsMeasured) {
   EXPECT_FALSE(shifted.band_nested);  // the band moved outside the previous one
 }
 
+// support_every_sample: false (estimate_offline): no mass per sample, and
+// assessSupport on the last sample gives what assess gave there.
+TEST(Health, SupportAssessedOnRequestEqualsThePerSampleOne) {
+  GrowthProblem p(0.5);
+  OneStepSettings every;
+  every.noise = NoiseModel{0.01, 1e-12};
+  OneStepSettings on_request = every;
+  on_request.health.support_every_sample = false;
+  OneStepFilter a(p.propagator, every), b(p.propagator, on_request);
+  StepResult ra, rb;
+  for (int k = 1; k <= 8; ++k) {
+    // Data at rate 0.78: the posterior moves against the prior's upper bound 0.75.
+    const Measurement m{0.1 * k, {0}, Eigen::VectorXd::Constant(1, std::exp(0.78 * 0.1 * k))};
+    ra = a.process(m);
+    rb = b.process(m);
+    ASSERT_EQ(ra.health.mass_outside_support.size(), 1);
+    EXPECT_EQ(rb.health.mass_outside_support.size(), 0) << k;
+    EXPECT_FALSE(rb.health.support_exceeded);
+    EXPECT_EQ(ra.mean, rb.mean) << k;  // nothing else depends on it
+  }
+  b.assessSupport(&rb);
+  ASSERT_EQ(rb.health.mass_outside_support.size(), 1);
+  EXPECT_GT(ra.health.mass_outside_support[0], 0.0);
+  EXPECT_EQ(rb.health.mass_outside_support[0], ra.health.mass_outside_support[0]);
+  EXPECT_EQ(rb.health.support_exceeded, ra.health.support_exceeded);
+  EXPECT_EQ(rb.health.warnings(), ra.health.warnings());
+}
+
 // The mass outside the support skips the draws that its bounds show inside;
 // the count must still be the full product's (psi * c over all draws), for
 // expansions that straddle a bound by a little (a tolerance near its prior)

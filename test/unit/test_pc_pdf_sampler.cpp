@@ -118,6 +118,35 @@ TEST(PdfSampler, IndependentDrawsPerParameterEqualPcHistogramAtSeedPlusI) {
   EXPECT_THROW(sampler.histograms(c.topRows(1)), std::invalid_argument);
 }
 
+// The set-up shared among threads (estimate_offline draws on every core):
+// each thread's generator skips to its first draw, so any thread count gives
+// the dense route's histograms, also when the draws end inside a chunk.
+TEST(PdfSampler, SetUpOnSeveralThreadsGivesTheSameHistograms) {
+  const PolynomialBasis basis(std::vector<GermSpec>(5, kBeta22), 2);
+  const Eigen::MatrixXd c = posteriorLike(5, basis.size(), 7);
+  const int draws = 5 * 1024 + 37;
+  const Eigen::MatrixXd psi = basis.evaluate(sampleGerms(basis, draws, 3));
+  for (int threads : {2, 3, 8}) {
+    const std::vector<Histogram> h =
+        ParameterPdfSampler(basis, draws, 30, 3, PdfSetupThreads{threads}).histograms(c, threads);
+    ASSERT_EQ(h.size(), 5u);
+    for (int i = 0; i < 5; ++i) {
+      const Histogram ref = referenceHistogram(psi, c.row(i).transpose(), 30);
+      EXPECT_EQ(h[i].edges, ref.edges) << threads << " threads, parameter " << i;
+      EXPECT_EQ(h[i].densities, ref.densities) << threads << " threads, parameter " << i;
+    }
+  }
+  // Independent draws per parameter, built on 2 threads: seed + i each.
+  const std::vector<Histogram> independent =
+      ParameterPdfSampler(basis, 2000, 30, 3, 5, PdfSetupThreads{2}).histograms(c);
+  for (int i = 0; i < 5; ++i) {
+    const Histogram old = pcHistogram(basis, c.row(i).transpose(), 2000, 30, 3 + i);
+    EXPECT_EQ(independent[i].edges, old.edges) << i;
+    EXPECT_EQ(independent[i].densities, old.densities) << i;
+  }
+  EXPECT_THROW(ParameterPdfSampler(basis, 0, 30, 3, 5, PdfSetupThreads{2}), std::invalid_argument);
+}
+
 TEST(PdfSampler, ConstantExpansionGetsAUnitWidthBinAndUnitArea) {
   const PolynomialBasis basis({kBeta22, kBeta22}, 2);
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(1, basis.size());
