@@ -12,7 +12,6 @@
 
 #include "pc_ekf/io/atomic_file.h"
 #include "pc_ekf/io/calibration.h"
-#include "pc_ekf/ros/model_plugins.h"
 #include "pc_ekf/tools/command_line.h"
 #include "pc_ekf/tools/record_input.h"
 
@@ -96,7 +95,7 @@ int main(int argc, char** argv) {
     std::vector<CalibrationRecord> records;
     std::uint64_t seed = 0;
     for (const Source& s : sources) {
-      EstimatorConfig config = loadConfigFile(s.config, modelRegistryWithPlugins());
+      EstimatorConfig config = loadConfigFile(s.config, modelRegistryOnDemand());
       if (!update.empty()) config.update = updateRuleFromString(update);
       checkCalibrationConfig(config, records.empty() ? nullptr : &records.front().config);
       seed = config.truth.seed;

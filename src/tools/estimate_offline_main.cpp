@@ -4,9 +4,7 @@
 #include <iostream>
 #include <string>
 
-#include "pc_ekf/ros/bag_io.h"
 #include "pc_ekf/io/estimation_setup.h"
-#include "pc_ekf/ros/model_plugins.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/tools/command_line.h"
@@ -36,7 +34,7 @@ int main(int argc, char** argv) {
     return args.badInput("give either --measurements or --bag, not both");
   }
   return args.run([&] {
-    EstimatorConfig config = loadConfigFile(args["--config"], modelRegistryWithPlugins());
+    EstimatorConfig config = loadConfigFile(args["--config"], modelRegistryOnDemand());
     if (args.has("--update")) config.update = updateRuleFromString(args["--update"]);
     const EstimationMethod method =
         estimationMethodFromString(args.has("--method") ? args["--method"] : "one_step");

@@ -10,7 +10,7 @@
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/record_sensitivity.h"
-#include "pc_ekf/ros/bag_io.h"
+#include "pc_ekf/tools/ros_on_demand.h"
 
 namespace pc_ekf {
 
@@ -25,7 +25,7 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   RecordInput r;
   std::shared_ptr<const ContactRoad> bag_road;
   if (!bag.empty()) {
-    BagRecord record = readBag(bag, bagReadOptions(config));
+    BagRecord record = readBagOnDemand(bag, config);
     for (std::size_t i = 0; i < record.warnings.size() && i < 5; ++i) {
       std::cerr << "[bag] " << bag << ": " << record.warnings[i] << "\n";
     }
