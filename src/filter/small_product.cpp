@@ -70,18 +70,18 @@ void portableProduct(const double* __restrict a, const double* __restrict b,
 }
 
 #if defined(__x86_64__)
-// The products on x86-64-v3 (AVX2, FMA): blocks of 8 rows (two vectors) and
-// 4 columns of dst held in 8 registers, then a block of 4 rows and single
-// rows, so that the loads of a and b serve several sums (the one-column
+// The products where the CPU has AVX2 and FMA (x86-64-v3): blocks of 8 rows
+// (two vectors) and 4 columns of dst held in 8 registers, then a block of 4
+// rows and single rows, so that the loads of a and b serve several sums (the one-column
 // loops above waited on one chain of additions). Every entry is still summed
 // over l in order, and fused or not as GCC compiled the one-column loops for
 // x86-64-v3, so that the values are theirs bit for bit: every m with fused
 // multiply-adds but 4 and 8 rows, which round the product first except in
 // the last term of an odd k (those loops took l in pairs).
-#define PC_EKF_V3 __attribute__((target("arch=x86-64-v3")))
+#define PC_EKF_AVX2_FMA __attribute__((target("avx2,fma")))
 
 template <bool Fused>
-PC_EKF_V3 inline __m256d multiplyAdd(__m256d acc, __m256d a, __m256d b) {
+PC_EKF_AVX2_FMA inline __m256d multiplyAdd(__m256d acc, __m256d a, __m256d b) {
   if constexpr (Fused) {
     return _mm256_fmadd_pd(a, b, acc);
   } else {
@@ -91,7 +91,7 @@ PC_EKF_V3 inline __m256d multiplyAdd(__m256d acc, __m256d a, __m256d b) {
   }
 }
 template <bool Fused>
-PC_EKF_V3 inline double multiplyAdd(double acc, double a, double b) {
+PC_EKF_AVX2_FMA inline double multiplyAdd(double acc, double a, double b) {
   if constexpr (Fused) {
     return __builtin_fma(a, b, acc);
   } else {
@@ -111,7 +111,7 @@ struct Operands {
 
 // Term l of the block's sums.
 template <int V, int C, bool Fused>
-PC_EKF_V3 inline void vectorTerm(const Operands& o, const double* bj, Eigen::Index l,
+PC_EKF_AVX2_FMA inline void vectorTerm(const Operands& o, const double* bj, Eigen::Index l,
                                  __m256d (&acc)[C][V]) {
   __m256d al[V];
   for (int v = 0; v < V; ++v) al[v] = _mm256_loadu_pd(o.a + l * o.m + 4 * v);
@@ -123,7 +123,7 @@ PC_EKF_V3 inline void vectorTerm(const Operands& o, const double* bj, Eigen::Ind
 
 // Rows [0, 4 V) of the block: V vectors per column, C columns at a time.
 template <int V, int C, bool Fused>
-PC_EKF_V3 inline void vectorRows(const Operands& o, Eigen::Index j) {
+PC_EKF_AVX2_FMA inline void vectorRows(const Operands& o, Eigen::Index j) {
   __m256d acc[C][V];
   for (int c = 0; c < C; ++c) {
     for (int v = 0; v < V; ++v) acc[c][v] = _mm256_setzero_pd();
@@ -139,7 +139,7 @@ PC_EKF_V3 inline void vectorRows(const Operands& o, Eigen::Index j) {
 
 // Rows [0, R) of the block (R < 4), C columns at a time.
 template <int R, int C, bool Fused>
-PC_EKF_V3 inline void scalarRows(const Operands& o, Eigen::Index j) {
+PC_EKF_AVX2_FMA inline void scalarRows(const Operands& o, Eigen::Index j) {
   double acc[C][R] = {};
   const double* bj = o.b + j * o.b_col_stride;
   for (Eigen::Index l = 0; l < o.k; ++l) {
@@ -154,20 +154,20 @@ PC_EKF_V3 inline void scalarRows(const Operands& o, Eigen::Index j) {
 }
 
 template <int V, bool Fused>
-PC_EKF_V3 void vectorBlock(const Operands& o) {
+PC_EKF_AVX2_FMA void vectorBlock(const Operands& o) {
   Eigen::Index j = 0;
   for (; j + 4 <= o.n; j += 4) vectorRows<V, 4, Fused>(o, j);
   for (; j < o.n; ++j) vectorRows<V, 1, Fused>(o, j);
 }
 template <int R, bool Fused>
-PC_EKF_V3 void scalarBlock(const Operands& o) {
+PC_EKF_AVX2_FMA void scalarBlock(const Operands& o) {
   Eigen::Index j = 0;
   for (; j + 4 <= o.n; j += 4) scalarRows<R, 4, Fused>(o, j);
   for (; j < o.n; ++j) scalarRows<R, 1, Fused>(o, j);
 }
 
 template <bool Fused>
-PC_EKF_V3 void blockedProduct(Operands o) {
+PC_EKF_AVX2_FMA void blockedProduct(Operands o) {
   const double* a = o.a;
   double* dst = o.dst;
   Eigen::Index r = 0;
@@ -199,7 +199,7 @@ void smallProduct(const double* a, const double* b, Eigen::Index b_row_stride,
                   Eigen::Index b_col_stride, double* dst, Eigen::Index m, Eigen::Index k,
                   Eigen::Index n) {
 #if defined(__x86_64__)
-  static const bool v3 = __builtin_cpu_supports("x86-64-v3");
+  static const bool v3 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
   if (v3) {
     const Operands o{a, b, b_row_stride, b_col_stride, dst, m, k, n};
     return (m == 4 || m == 8) ? blockedProduct<false>(o) : blockedProduct<true>(o);

@@ -13,7 +13,7 @@
 namespace pc_ekf {
 namespace {
 
-constexpr int kBlock = 64;  // draws per block: the block's basis (S x 64, 40 KB at S = 78) stays near L1
+constexpr int kBlock = 32;  // draws per block: the block's basis (S x 32, 20 KB at S = 78) stays in L1
 constexpr int kLanes = 16;    // draws accumulated in registers at once
 constexpr int kPad = kLanes;  // rows padded so that a block's last lanes stay inside
 

@@ -19,7 +19,7 @@ double roundedMultiplyAdd(double acc, double a, double b) {
 
 bool fusedMultiplyAdds() {
 #if defined(__x86_64__)
-  return __builtin_cpu_supports("x86-64-v3");
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else
   return false;
 #endif
