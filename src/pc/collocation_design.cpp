@@ -142,7 +142,9 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
       sequence == PointSequence::kGauss
           ? Eigen::MatrixXd(weights.cwiseSqrt().asDiagonal() * design_)
           : design_;
-  const Eigen::VectorXd sv = Eigen::JacobiSVD<Eigen::MatrixXd>(conditioned).singularValues();
+  // Singular values only (the check and conditionNumber()): divide and conquer
+  // (a third of one-sided Jacobi's time at 160 x 78).
+  const Eigen::VectorXd sv = Eigen::BDCSVD<Eigen::MatrixXd>(conditioned).singularValues();
   condition_ =
       sv(sv.size() - 1) > 0.0 ? sv(0) / sv(sv.size() - 1) : std::numeric_limits<double>::infinity();
   if (!(condition_ <= max_condition)) {
