@@ -1,7 +1,9 @@
 #include "pc_ekf/pc/polynomial_basis.h"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 namespace pc_ekf {
 namespace {
@@ -68,10 +70,51 @@ Eigen::VectorXd PolynomialBasis::evaluate(const Eigen::Ref<const Eigen::VectorXd
   return out;
 }
 
+// The point-by-point evaluate()'s numbers, bit for bit, without its two
+// allocations per point: the recurrence with its constants taken out of the
+// loop (OrthonormalFamily::evaluate's operations in its order), and each term
+// the product of its factors of degree > 0 in ascending d (the factors
+// psi_0 = 1 it multiplies by are exact).
 Eigen::MatrixXd PolynomialBasis::evaluate(const Eigen::MatrixXd& points) const {
-  Eigen::MatrixXd out(points.rows(), size());
-  for (Eigen::Index q = 0; q < points.rows(); ++q) {
-    out.row(q) = evaluate(points.row(q).transpose()).transpose();
+  if (points.cols() != dimension()) {
+    throw std::invalid_argument("PolynomialBasis::evaluate: point has " +
+                                std::to_string(points.cols()) + " coordinates, expected " +
+                                std::to_string(dimension()));
+  }
+  const Eigen::Index rows = points.rows();
+  const int n = dimension(), p = order_;
+  // univariate(q, d * p + k - 1) = psi_k(points(q, d)), k = 1..p.
+  Eigen::MatrixXd univariate(rows, static_cast<Eigen::Index>(n) * p);
+  for (int d = 0; d < n && p >= 1; ++d) {
+    const OrthonormalFamily& f = families_[d];
+    std::vector<double> a(p), sqrt_b(p + 1);
+    for (int k = 0; k < p; ++k) a[k] = f.recurrenceA(k);
+    for (int k = 1; k <= p; ++k) sqrt_b[k] = std::sqrt(f.recurrenceB(k));
+    for (Eigen::Index q = 0; q < rows; ++q) {
+      const double x = points(q, d);
+      double before = 1.0, current = (x - a[0]) / sqrt_b[1];
+      univariate(q, d * p) = current;
+      for (int k = 1; k < p; ++k) {
+        const double next = ((x - a[k]) * current - sqrt_b[k] * before) / sqrt_b[k + 1];
+        univariate(q, d * p + k) = next;
+        before = current;
+        current = next;
+      }
+    }
+  }
+  Eigen::MatrixXd out(rows, size());
+  std::vector<Eigen::Index> factors;
+  for (int j = 0; j < size(); ++j) {
+    factors.clear();
+    for (int d = 0; d < n; ++d) {
+      if (indices_[j][d] > 0) factors.push_back(static_cast<Eigen::Index>(d) * p + indices_[j][d] - 1);
+    }
+    if (factors.empty()) {
+      out.col(j).setOnes();
+      continue;
+    }
+    out.col(j) = univariate.col(factors[0]);
+    for (std::size_t m = 1; m < factors.size(); ++m) out.col(j).array() *= univariate.col(factors[m]).array();
   }
   return out;
 }

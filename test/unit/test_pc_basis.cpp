@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <random>
 #include <stdexcept>
 #include <vector>
 
@@ -75,6 +76,37 @@ TEST(PolynomialBasis, TermsAreProductsOfUnivariateValues) {
   EXPECT_EQ(Eigen::VectorXd(a.row(0).transpose()), psi);
   EXPECT_EQ(Eigen::VectorXd(a.row(1).transpose()), basis.evaluate(points.row(1).transpose()));
   EXPECT_THROW(basis.evaluate(Eigen::Vector2d(0.0, 0.0)), std::invalid_argument);
+}
+
+// The matrix overload forms the recurrence and the products without the
+// per-point route's allocations: the same numbers bit for bit, for every
+// family, order and truncation, at points inside and outside the supports.
+TEST(PolynomialBasis, MatrixOfPointsEqualsThePointByPointValuesBitForBit) {
+  const GermSpec gauss{GermFamily::kGaussian, 0, 0};
+  const GermSpec gam{GermFamily::kGamma, 2.5, 0};
+  const GermSpec beta25{GermFamily::kBeta, 2.0, 5.0};
+  const GermSpec uniform{GermFamily::kUniform, 0, 0};
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> x(-2.5, 3.0);
+  BasisTruncation hyperbolic;
+  hyperbolic.kind = TruncationKind::kHyperbolic;
+  hyperbolic.q_norm = 0.6;
+  for (int order : {0, 1, 2, 4}) {
+    for (const BasisTruncation& t : {BasisTruncation{}, hyperbolic}) {
+      const PolynomialBasis basis({kBeta22, gauss, gam, beta25, uniform}, order, t);
+      Eigen::MatrixXd points(37, 5);
+      for (Eigen::Index i = 0; i < points.size(); ++i) points(i) = x(rng);
+      const Eigen::MatrixXd a = basis.evaluate(points);
+      ASSERT_EQ(a.rows(), 37);
+      ASSERT_EQ(a.cols(), basis.size());
+      for (Eigen::Index q = 0; q < points.rows(); ++q) {
+        EXPECT_EQ(Eigen::VectorXd(a.row(q).transpose()), basis.evaluate(points.row(q).transpose()))
+            << "order " << order << " point " << q;
+      }
+    }
+  }
+  EXPECT_EQ(PolynomialBasis({kBeta22}, 2).evaluate(Eigen::MatrixXd(0, 1)).rows(), 0);
+  EXPECT_THROW(PolynomialBasis({kBeta22}, 2).evaluate(Eigen::MatrixXd(3, 2)), std::invalid_argument);
 }
 
 TEST(PolynomialBasis, MultivariateOrthonormalityByTensorGauss) {
