@@ -154,7 +154,12 @@ std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& co
   // Eigen's block heuristic for pcHistogram's draws x S product (lhs stride = draws).
   const int block_cols = gemvBlockColumns(draws_, terms_);
   // Column per quantity, padded so that a block's last lanes stay inside.
-  LargeArray values_buffer(static_cast<std::size_t>(draws_ + kPad) * quantities);
+  // The calling thread's buffer, kept for its next call (the node's PDF
+  // worker calls every k-th sample): its pages are touched once. Only the
+  // values written below are read.
+  thread_local LargeArray values_buffer;
+  const std::size_t needed = static_cast<std::size_t>(draws_ + kPad) * quantities;
+  if (values_buffer.size() < needed) values_buffer = LargeArray(needed);
   Eigen::Map<Eigen::MatrixXd> values(values_buffer.data(), draws_ + kPad, quantities);
   // Coefficients row by row, contiguous.
   std::vector<double> rows(static_cast<std::size_t>(quantities) * terms_);
