@@ -114,7 +114,7 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
 ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws, int bins,
                                          std::uint64_t seed, int parameters, PdfSetupThreads threads)
     : terms_(basis.size()), draws_(draws), bins_(bins) {
-  // Checked here: a helper thread's exception would end the process.
+  // Checked before any sampler is made (the message names the set's numbers).
   if (draws < 1 || bins < 1 || parameters < 0) {
     throw std::invalid_argument("ParameterPdfSampler: need draws, bins >= 1 and parameters >= 0 (got " +
                                 std::to_string(draws) + ", " + std::to_string(bins) + ", " +

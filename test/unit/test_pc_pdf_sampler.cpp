@@ -10,6 +10,7 @@
 #include <random>
 #include <stdexcept>
 
+#include "pc_ekf/pc/in_parts.h"
 #include "pc_ekf/pc/pc_statistics.h"
 #include "pc_ekf/pc/pdf_sampler.h"
 
@@ -145,6 +146,24 @@ TEST(PdfSampler, SetUpOnSeveralThreadsGivesTheSameHistograms) {
     EXPECT_EQ(independent[i].densities, old.densities) << i;
   }
   EXPECT_THROW(ParameterPdfSampler(basis, 0, 30, 3, 5, PdfSetupThreads{2}), std::invalid_argument);
+}
+
+// The threads' split (in_parts.h): every index once, and a part's exception
+// reaches the caller after all parts have ended.
+TEST(InParts, EveryIndexOnceAndAHelperPartsExceptionReachesTheCaller) {
+  std::vector<int> seen(1000, 0);
+  inNumberedParts(1000, 3, [&](int, int begin, int end) {
+    for (int i = begin; i < end; ++i) ++seen[i];
+  });
+  EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), 1000);
+  std::vector<int> ended(3, 0);
+  EXPECT_THROW(inNumberedParts(30, 3,
+                               [&](int part, int, int) {
+                                 ended[part] = 1;
+                                 if (part == 2) throw std::invalid_argument("part 2");
+                               }),
+               std::invalid_argument);
+  EXPECT_EQ(ended, std::vector<int>({1, 1, 1}));
 }
 
 TEST(PdfSampler, ConstantExpansionGetsAUnitWidthBinAndUnitArea) {
