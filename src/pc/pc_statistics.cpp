@@ -110,7 +110,7 @@ void gemvOrderValues(const double* const* psi, const double* c, int terms, int b
 
 Eigen::MatrixXd sampleGerms(const PolynomialBasis& basis, int draws, std::uint64_t seed) {
   if (draws < 0) throw std::invalid_argument("sampleGerms: negative number of draws");
-  std::mt19937_64 rng(seed);
+  GermGenerator rng(seed);
   Eigen::MatrixXd samples(draws, basis.dimension());
   for (int i = 0; i < draws; ++i) {
     for (int d = 0; d < basis.dimension(); ++d) samples(i, d) = drawGerm(rng, basis.family(d));

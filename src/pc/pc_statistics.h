@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <random>
 
+#include "pc_ekf/pc/germ_generator.h"
 #include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
@@ -47,10 +48,10 @@ double gemvValue(const double* psi_row, Eigen::Index stride, const double* c, Ei
 void gemvOrderValues(const double* const* psi, const double* c, int terms, int block_cols,
                      int count, double* values);
 
-// One germ value of sampleGerms's stream: 53 random bits, offset by half a
-// unit (u strictly inside (0, 1), the same stream on every standard library),
-// through the family's inverse CDF.
-inline double drawGerm(std::mt19937_64& rng, const OrthonormalFamily& family) {
+// One germ value of sampleGerms's stream: 53 random bits of std::mt19937_64's
+// stream (GermGenerator), offset by half a unit (u strictly inside (0, 1), the
+// same stream on every standard library), through the family's inverse CDF.
+inline double drawGerm(GermGenerator& rng, const OrthonormalFamily& family) {
   const double u = (static_cast<double>(rng() >> 11) + 0.5) * 0x1.0p-53;
   return family.inverseCdf(u);
 }

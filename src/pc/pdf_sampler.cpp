@@ -79,7 +79,7 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
   constexpr int kChunk = 1024;
   const int chunks = (draws + kChunk - 1) / kChunk;
   inParts(chunks, threads.count, [&](int chunk_begin, int chunk_end) {
-    std::mt19937_64 rng(seed);
+    GermGenerator rng(seed);
     rng.discard(static_cast<unsigned long long>(chunk_begin) * kChunk * n);
     std::vector<double> chunk(static_cast<std::size_t>(kChunk) * n);  // draw-major
     for (int q0 = chunk_begin * kChunk; q0 < std::min(draws, chunk_end * kChunk); q0 += kChunk) {

@@ -2,6 +2,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
+#include <random>
 #include <stdexcept>
 
 #include "pc_ekf/pc/pc_statistics.h"
@@ -19,6 +21,25 @@ Eigen::VectorXd massCoefficients() {
   c(0) = 200.0;
   c(1) = 100.0 / std::sqrt(5.0);
   return c;
+}
+
+// The germ draws' generator is std::mt19937_64's stream, and its discard
+// skips as that many calls do (the PDF set-up's threads start with it).
+TEST(GermGenerator, EqualsTheStandardEngineAndItsDiscard) {
+  for (std::uint64_t seed : {0ULL, 11ULL, 5489ULL, 0xFFFFFFFFFFFFFFFFULL}) {
+    std::mt19937_64 standard(seed);
+    GermGenerator fast(seed);
+    for (int i = 0; i < 200000; ++i) ASSERT_EQ(fast(), standard()) << "seed " << seed << " output " << i;
+  }
+  for (unsigned long long skip : {0ULL, 1ULL, 311ULL, 312ULL, 313ULL, 624ULL, 100007ULL}) {
+    std::mt19937_64 standard(11);
+    GermGenerator fast(11);
+    standard();  // from inside a block as well
+    fast();
+    standard.discard(skip);
+    fast.discard(skip);
+    for (int i = 0; i < 1000; ++i) ASSERT_EQ(fast(), standard()) << "after discard " << skip;
+  }
 }
 
 TEST(PcStatistics, MeanCovarianceStddevFromCoefficients) {
