@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 
+#include "pc_ekf/pc/in_parts.h"
+
 namespace pc_ekf {
 
 namespace {
@@ -32,9 +34,7 @@ constexpr long kIndexMask = (1L << kIndexBits) - 1;
 
 }  // namespace
 
-int ColumnWorkers::defaultThreads() {
-  return std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-}
+int ColumnWorkers::defaultThreads() { return machineThreads(); }
 
 ColumnWorkers::ColumnWorkers(int threads) : threads_(threads <= 0 ? defaultThreads() : threads) {
   for (int i = 1; i < threads_; ++i) workers_.emplace_back([this] { workerLoop(); });

@@ -2,11 +2,11 @@
 
 #include <cmath>
 #include <stdexcept>
-#include <thread>
 
 #include "pc_ekf/filter/kalman_update.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/pc/polynomial_basis.h"
+#include "pc_ekf/pc/in_parts.h"
 #include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
@@ -38,28 +38,20 @@ void EnsembleKalmanFilter::forecast(double t1, int* inadmissible) {
   *inadmissible = static_cast<int>(full.cols() - cols.size());
   const Eigen::Index n = static_cast<Eigen::Index>(cols.size());
   const int threads = n >= 64 ? std::max(1, settings_.threads) : 1;
-  std::vector<std::thread> workers;
-  std::vector<Eigen::ArrayXXd> parts(threads);
-  for (int w = 0; w < threads; ++w) {
-    const Eigen::Index b = n * w / threads, e = n * (w + 1) / threads;
+  // Contiguous parts of the admissible members, each integrated as one batch
+  // and written back to its own columns.
+  inNumberedParts(static_cast<int>(n), threads, [&](int, int b, int e) {
+    if (e == b) return;
     Eigen::MatrixXd p(full.rows(), e - b);
-    parts[w].resize(states_.rows(), e - b);
+    Eigen::ArrayXXd part(states_.rows(), e - b);
     for (Eigen::Index i = b; i < e; ++i) {
       p.col(i - b) = full.col(cols[i]);
-      parts[w].col(i - b) = states_.col(cols[i]);
+      part.col(i - b) = states_.col(cols[i]);
     }
-    auto job = [this, p, t1, &parts, w] {
-      if (p.cols() == 0) return;
-      const auto batch = model_->prepare(p);
-      integrate(*model_, *batch, t_, t1, parts[w], settings_.integration);
-    };
-    if (threads == 1) job(); else workers.emplace_back(job);
-  }
-  for (auto& w : workers) w.join();
-  for (int w = 0; w < threads; ++w) {
-    const Eigen::Index b = n * w / threads;
-    for (Eigen::Index i = 0; i < parts[w].cols(); ++i) states_.col(cols[b + i]) = parts[w].col(i);
-  }
+    const auto batch = model_->prepare(p);
+    integrate(*model_, *batch, t_, t1, part, settings_.integration);
+    for (Eigen::Index i = b; i < e; ++i) states_.col(cols[i]) = part.col(i - b);
+  });
   integrations_ += n;
 }
 

@@ -85,7 +85,6 @@ class HealthMonitor {
   double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i);
   void fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass);
 
- private:
   HealthSettings settings_;
   std::shared_ptr<const SupportDraws> draws_;  // shared by monitors of the same basis
   Eigen::VectorXd near_;                       // support_draws: mean + first-degree terms (reused)

@@ -8,8 +8,9 @@ namespace pc_ekf {
 
 // dst (m x n, column-major) = a (m x k, column-major, leading dimension m) * b,
 // b(l, j) = b[l * b_row_stride + j * b_col_stride]: the per-sample products
-// X A^T and Y P^T (m = 4 channels or 8 to 12 rows: the column of dst stays
-// in registers; other m in blocks of 8 rows and 4 columns),
+// X A^T and Y P^T (with AVX2 and FMA: blocks of 8 rows and 4 columns of dst
+// in registers, any m; otherwise the column of dst in registers for m = 4
+// and 8 to 12),
 // where Eigen's blocked GEMM spends more on packing than on arithmetic. Each
 // column of dst is summed over l in order, whatever n is: a column's value
 // does not depend on which columns are computed with it.

@@ -2,7 +2,8 @@
 
 #include <algorithm>
 #include <stdexcept>
-#include <thread>
+
+#include "pc_ekf/pc/in_parts.h"
 
 namespace pc_ekf {
 
@@ -54,21 +55,12 @@ std::vector<Eigen::MatrixXd> simulateChannelsParallel(const MechanicalModel& mod
   const Eigen::Index q = params.cols();
   threads = static_cast<int>(std::max<Eigen::Index>(1, std::min<Eigen::Index>(threads, q / 8)));
   if (threads <= 1) return simulateChannels(model, params, times, settings);
-  std::vector<std::vector<Eigen::MatrixXd>> parts(threads);
-  std::vector<std::thread> workers;
-  std::vector<Eigen::Index> start(threads + 1);
-  for (int i = 0; i <= threads; ++i) start[i] = q * i / threads;
-  for (int i = 0; i < threads; ++i) {
-    workers.emplace_back([&, i] {
-      parts[i] = simulateChannels(model, params.middleCols(start[i], start[i + 1] - start[i]),
-                                  times, settings);
-    });
-  }
-  for (auto& w : workers) w.join();
   std::vector<Eigen::MatrixXd> out(times.size(), Eigen::MatrixXd(model.observationMatrix().rows(), q));
-  for (std::size_t k = 0; k < times.size(); ++k) {
-    for (int i = 0; i < threads; ++i) out[k].middleCols(start[i], start[i + 1] - start[i]) = parts[i][k];
-  }
+  inNumberedParts(static_cast<int>(q), threads, [&](int, int begin, int end) {
+    const std::vector<Eigen::MatrixXd> part =
+        simulateChannels(model, params.middleCols(begin, end - begin), times, settings);
+    for (std::size_t k = 0; k < times.size(); ++k) out[k].middleCols(begin, end - begin) = part[k];
+  });
   return out;
 }
 

@@ -16,7 +16,8 @@ namespace {
 // m 10^s / 2^-e (v = m 2^e, s = 16 - x), rounded half to even on the exact
 // remainder, as printf and std::to_chars round; then %g's layout. False
 // (nothing written) outside that range, where appendG17 asks std::to_chars.
-// About 40 % of to_chars' time (test_io_number_text: equal on 2e7 values).
+// About 60 % of to_chars' time (96 -> 58 ns); test_io_number_text compares
+// the two on 4e6 values.
 bool exactG17(double v, char* out, char** end) {
   std::uint64_t bits;
   std::memcpy(&bits, &v, sizeof bits);
@@ -116,7 +117,6 @@ bool exactG17(double v, char* out, char** end) {
 }
 
 }  // namespace
-
 
 std::string roundTripText(double v) {
   char text[40];

@@ -4,7 +4,6 @@
 #include <future>
 #include <optional>
 #include <stdexcept>
-#include <thread>
 
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
