@@ -1,11 +1,21 @@
 #include "pc_ekf/filter/measurement.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace pc_ekf {
 
 Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
-  const Eigen::ArrayXd relative = (r_relative * m.values.array()).square();
+  Eigen::ArrayXd relative = (r_relative * m.values.array()).square();
+  if (channel_relative.size() != 0) {
+    for (Eigen::Index i = 0; i < relative.size(); ++i) {
+      const int c = m.channels[static_cast<std::size_t>(i)];
+      if (c < 0 || c >= channel_relative.size()) {
+        throw std::invalid_argument("noise: no r_relative for channel");
+      }
+      relative[i] = (channel_relative[c] * m.values[i]) * (channel_relative[c] * m.values[i]);
+    }
+  }
   if (rule == NoiseRule::kPaper) return relative.max(r_floor).matrix();
   Eigen::VectorXd v(m.values.size());
   for (Eigen::Index i = 0; i < v.size(); ++i) {
@@ -24,6 +34,24 @@ Eigen::VectorXd NoiseModel::stackedVariances(const std::vector<Measurement>& ser
   for (const auto& m : series) {
     out.segment(row, m.values.size()) = variances(m);
     row += m.values.size();
+  }
+  return out;
+}
+
+MeasurementSeries onlyChannels(const MeasurementSeries& series, const std::vector<int>& keep) {
+  MeasurementSeries out;
+  out.reserve(series.size());
+  for (const Measurement& m : series) {
+    Measurement kept;
+    kept.time = m.time;
+    std::vector<double> values;
+    for (std::size_t i = 0; i < m.channels.size(); ++i) {
+      if (std::find(keep.begin(), keep.end(), m.channels[i]) == keep.end()) continue;
+      kept.channels.push_back(m.channels[i]);
+      values.push_back(m.values[static_cast<Eigen::Index>(i)]);
+    }
+    kept.values = Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+    out.push_back(std::move(kept));
   }
   return out;
 }

@@ -32,10 +32,17 @@ struct NoiseModel {
   double r_floor = 1e-12;         // paper rule
   NoiseRule rule = NoiseRule::kPaper;
   Eigen::VectorXd channel_std;    // sensor rule: one per model channel
+  // One r_relative per model channel (empty: r_relative for every channel):
+  // an IMU's noise does not grow with the 9.81 of gravity in its reading.
+  Eigen::VectorXd channel_relative;
   Eigen::VectorXd variances(const Measurement& m) const;
   // Over a whole record, stacked in sample order.
   Eigen::VectorXd stackedVariances(const std::vector<Measurement>& series) const;
 };
+
+// The series with only the channels in `keep` (ascending model indices);
+// samples left with none stay (as samples without readings).
+MeasurementSeries onlyChannels(const MeasurementSeries& series, const std::vector<int>& keep);
 
 // Every k-th sample (k = decimation), keeping samples k, 2k, ... (1-based).
 MeasurementSeries decimate(const MeasurementSeries& series, int decimation);

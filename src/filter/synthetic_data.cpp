@@ -90,7 +90,8 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
     }
   }
   const std::size_t nc = static_cast<std::size_t>(model.observationMatrix().rows());
-  for (const auto* list : {&s.sensor.noise_floor, &s.sensor.bias, &s.sensor.quantisation}) {
+  for (const auto* list : {&s.sensor.noise_floor, &s.sensor.bias, &s.sensor.quantisation,
+                           &s.channel_noise_relative}) {
     if (!list->empty() && list->size() != nc) {
       throw std::invalid_argument("sensor imperfections: one value per model channel expected");
     }
@@ -113,7 +114,8 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
       const int ch = s.channels[c];
       const double z = channels[k](ch, 0);
       const double floor = channelValue(s.sensor.noise_floor, ch, s.noise_floor);
-      const double sd = std::hypot(s.noise_relative * z, floor);
+      const double relative = channelValue(s.channel_noise_relative, ch, s.noise_relative);
+      const double sd = std::hypot(relative * z, floor);
       exact.values[c] = z;
       double v = z + sd * normal(rng);
       if (!s.sensor.bias.empty()) v += s.sensor.bias[ch];

@@ -48,6 +48,7 @@ struct SyntheticDataSettings {
   std::vector<double> times;
   std::vector<int> channels;  // ascending indices into the model's channels
   double noise_relative = 0.01;
+  std::vector<double> channel_noise_relative;  // per model channel (empty: noise_relative)
   double noise_floor = 0.0;
   std::uint64_t seed = 1;
   IntegratorSettings integration;

@@ -35,7 +35,16 @@ std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
 
 std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
                                                  std::shared_ptr<const ContactRoad> road) {
-  return c.model_type->build(*c.modelParameters(), std::move(road));
+  const ReadingSettings readings = c.measurement.readings(c.model_type->description());
+  auto model = c.model_type->build(*c.modelParameters(), std::move(road), readings);
+  for (int i : channelIndices(c)) {
+    if (!model->channelModelled(i)) {
+      throw ConfigError(c.source + ": key 'measurement.channels': model " + c.model_type->name() +
+                        " cannot give '" + model->channelNames()[static_cast<std::size_t>(i)] +
+                        "' as built");
+    }
+  }
+  return model;
 }
 
 void checkToleranceDomain(const EstimatorConfig& c, const MechanicalModel& model,
@@ -111,6 +120,8 @@ NoiseModel makeNoiseModel(const EstimatorConfig& c) {
   n.r_floor = c.measurement.r_floor;
   n.channel_std = Eigen::Map<const Eigen::VectorXd>(c.measurement.sensor_std.data(),
                                                     c.measurement.sensor_std.size());
+  n.channel_relative = Eigen::Map<const Eigen::VectorXd>(
+      c.measurement.r_relative_per_channel.data(), c.measurement.r_relative_per_channel.size());
   return n;
 }
 
@@ -174,7 +185,8 @@ std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
   const ContactRoad* road = model.contactRoad();
   if (!road) throw ConfigError(c.source + ": key 'truth.vehicle': the model has no road to share");
   const std::shared_ptr<const ContactRoad> shared(std::shared_ptr<void>(), road);
-  return c.model_type->build(*c.truthModelParameters(), shared);
+  return c.model_type->build(*c.truthModelParameters(), shared,
+                             c.measurement.readings(c.model_type->description()));
 }
 
 namespace {
@@ -216,6 +228,7 @@ SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const Mechanic
   s.times = uniformSampleTimes(c.sampling.samples, c.sampling.duration);
   s.channels = channelIndices(c);
   s.noise_relative = c.measurement.noise_relative;
+  s.channel_noise_relative = c.measurement.noise_relative_per_channel;
   s.noise_floor = c.measurement.noise_floor;
   s.seed = seed;
   s.integration = c.integration;

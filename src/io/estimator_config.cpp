@@ -360,6 +360,55 @@ TruthChange readChange(YamlMapReader e, const EstimatorConfig& c, double previou
   return ch;
 }
 
+// Values given per selected channel (in `selected`'s order), in the model's
+// channel order; the channels not selected take `fill`.
+std::vector<double> inModelOrder(const std::vector<double>& given,
+                                 const std::vector<std::string>& selected,
+                                 const std::vector<std::string>& model_channels, double fill) {
+  std::vector<double> out(model_channels.size(), fill);
+  for (std::size_t i = 0; i < selected.size(); ++i) {
+    const auto it = std::find(model_channels.begin(), model_channels.end(), selected[i]);
+    out[static_cast<std::size_t>(it - model_channels.begin())] = given[i];
+  }
+  return out;
+}
+
+// The same, the channels not selected at the largest given (unused).
+std::vector<double> inModelOrder(const std::vector<double>& given,
+                                 const std::vector<std::string>& selected,
+                                 const std::vector<std::string>& model_channels) {
+  return inModelOrder(given, selected, model_channels,
+                      *std::max_element(given.begin(), given.end()));
+}
+
+// measurement.<key>: one number >= 0 for every channel, or a list with one
+// per channel of measurement.channels (its order) or of the model.
+void readPerChannel(YamlMapReader& m, const std::string& key, const MeasurementConfig& mc,
+                    double& scalar, std::vector<double>& per_channel,
+                    const std::vector<std::string>& model_channels) {
+  if (!m.isSequence(key)) {
+    m.number(key, scalar, 0.0, std::numeric_limits<double>::infinity());
+    return;
+  }
+  std::vector<double> list;
+  m.numberList(key, list, 1, std::max(mc.channels.size(), model_channels.size()));
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    if (!(list[i] >= 0.0)) {
+      m.fail(key + "[" + std::to_string(i) + "]", roundTripText(list[i]), "a number >= 0");
+    }
+  }
+  if (list.size() == mc.channels.size()) {
+    per_channel = inModelOrder(list, mc.channels, model_channels);
+  } else if (list.size() == model_channels.size()) {
+    per_channel = list;
+  } else {
+    m.fail(key, "a list of " + std::to_string(list.size()),
+           "one number, or one per channel of measurement.channels (" +
+               std::to_string(mc.channels.size()) + ") or of the model (" +
+               std::to_string(model_channels.size()) + ")");
+  }
+}
+
 void readTruth(YamlMapReader t, EstimatorConfig& c) {
   const int n = static_cast<int>(c.uncertain.size()), loads = c.loadCount();
   // truth.xi: one per `uncertain:` entry (the tolerances' truth is the truth
@@ -401,11 +450,21 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
     }
   }
 
-  const std::size_t kChannels = c.model_type->channelNames().size();
+  // One number for all, or one per channel of measurement.channels or of the model.
+  const std::vector<std::string>& model_channels = c.model_type->channelNames();
+  const std::size_t kChannels = model_channels.size(), selected = c.measurement.channels.size();
   YamlMapReader s = t.map("sensor");
-  s.numberPerItem("noise_floor", c.truth.sensor.noise_floor, kChannels, 0.0, kInf);
-  s.numberPerItem("bias", c.truth.sensor.bias, kChannels, -kInf, kInf);
-  s.numberPerItem("quantisation", c.truth.sensor.quantisation, kChannels, 0.0, kInf);
+  const auto perChannel = [&](const char* key, std::vector<double>& v, double min) {
+    const bool per_selected = s.isSequence(key) && s.sequence(key).size() == selected &&
+                              selected != kChannels;
+    s.numberPerItem(key, v, per_selected ? selected : kChannels, min, kInf);
+    if (per_selected && !v.empty()) {
+      v = inModelOrder(v, c.measurement.channels, model_channels, 0.0);
+    }
+  };
+  perChannel("noise_floor", c.truth.sensor.noise_floor, 0.0);
+  perChannel("bias", c.truth.sensor.bias, -kInf);
+  perChannel("quantisation", c.truth.sensor.quantisation, 0.0);
   s.finish();
 
   YamlMapReader g = t.map("timing");
@@ -471,6 +530,21 @@ Eigen::VectorXd EstimatorConfig::parameterValues(const Eigen::VectorXd& xi) cons
     v[i] = uncertain[i].nominal * (1.0 + uncertain[i].relative_range * xi[i]);
   }
   return v;
+}
+
+namespace {
+
+}  // namespace
+
+ReadingSettings MeasurementConfig::readings(const ModelDescription& model) const {
+  ReadingSettings r;
+  r.zero = zero;
+  r.as_states = zero == ZeroConvention::kTare;
+  for (const ChannelSpec& spec : model.channels()) {
+    if (spec.selected_by_default) continue;
+    r.as_states |= std::find(channels.begin(), channels.end(), spec.name) != channels.end();
+  }
+  return r;
 }
 
 EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_name,
@@ -584,7 +658,7 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
 
   YamlMapReader m = root.map("measurement");
   const std::vector<std::string>& model_channels = c.model_type->channelNames();
-  c.measurement.channels = model_channels;
+  c.measurement.channels = c.model_type->description().defaultChannelNames();
   m.textList("channels", c.measurement.channels);
   const std::set<std::string> known(model_channels.begin(), model_channels.end());
   std::string channel_list;
@@ -596,9 +670,15 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
     }
   }
   if (c.measurement.channels.empty()) m.fail("channels", "(empty)", "at least one channel");
-  m.number("noise_relative", c.measurement.noise_relative, 0.0, kInf);
+  std::string zero = toString(c.measurement.zero);
+  m.text("zero", zero);
+  if (zero != "rest" && zero != "tare") m.fail("zero", "'" + zero + "'", "rest or tare");
+  c.measurement.zero = zeroConventionFromString(zero);
+  readPerChannel(m, "noise_relative", c.measurement, c.measurement.noise_relative,
+                 c.measurement.noise_relative_per_channel, model_channels);
   m.number("noise_floor", c.measurement.noise_floor, 0.0, kInf);
-  m.number("r_relative", c.measurement.r_relative, 0.0, kInf);
+  readPerChannel(m, "r_relative", c.measurement, c.measurement.r_relative,
+                 c.measurement.r_relative_per_channel, model_channels);
   m.number("r_floor", c.measurement.r_floor, 0.0, kInf, true);
   std::string r_rule = c.measurement.r_rule == NoiseRule::kSensor ? "sensor" : "paper";
   m.text("r_rule", r_rule);
@@ -606,10 +686,16 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   c.measurement.r_rule = r_rule == "sensor" ? NoiseRule::kSensor : NoiseRule::kPaper;
   m.numberList("sensor_std", c.measurement.sensor_std, 0, known.size());
   if (c.measurement.sensor_std.size() == 1) c.measurement.sensor_std.resize(known.size(), c.measurement.sensor_std[0]);
+  // One per selected channel (in measurement.channels' order): the model's
+  // order, the channels not selected at the largest given (never used).
+  if (c.measurement.sensor_std.size() == c.measurement.channels.size()) {
+    c.measurement.sensor_std = inModelOrder(c.measurement.sensor_std, c.measurement.channels,
+                                            model_channels);
+  }
   if (c.measurement.r_rule == NoiseRule::kSensor) {
     if (c.measurement.sensor_std.size() != known.size()) {
       m.fail("sensor_std", c.measurement.sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(c.measurement.sensor_std.size()),
-             "with r_rule sensor: one absolute std per channel " + channel_list + " (or one for all)");
+             "with r_rule sensor: one absolute std per channel of measurement.channels, or per channel " + channel_list + " (or one for all)");
     }
     for (double v : c.measurement.sensor_std) {
       if (!(v > 0.0)) m.fail("sensor_std", std::to_string(v), "positive standard deviations (m, m/s)");

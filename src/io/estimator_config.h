@@ -54,7 +54,9 @@ struct SamplingConfig {
 };
 
 struct MeasurementConfig {
-  std::vector<std::string> channels = rollPlaneType()->channelNames();  // model.type's (parsed)
+  // model.type's channels selected by default (parsed); IMU channels by name.
+  std::vector<std::string> channels = rollPlaneType()->description().defaultChannelNames();
+  ZeroConvention zero = ZeroConvention::kRest;  // measurement.zero: rest | tare
   double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
   double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
   // Filter R (see NoiseModel): paper R_jj = max(r_floor, (r_relative z_obs,j)^2);
@@ -63,6 +65,12 @@ struct MeasurementConfig {
   double r_relative = 0.01;
   double r_floor = 1e-12;
   std::vector<double> sensor_std;  // sensor rule: absolute std per channel (the model's order)
+  // A list in the YAML: one value per channel (the model's order here; empty =
+  // the scalar above for every channel).
+  std::vector<double> noise_relative_per_channel, r_relative_per_channel;
+  // The model's readings: the zero convention, and readings kept as states
+  // when the convention or a selected channel (IMU) needs them.
+  ReadingSettings readings(const ModelDescription& model) const;
 };
 
 // From `time` on the truth is at germ point `xi` (synthetic data).

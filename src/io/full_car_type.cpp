@@ -17,6 +17,11 @@ class FullCarType : public ModelType {
                                                std::shared_ptr<const ContactRoad> road) const override {
     return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road));
   }
+  std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
+                                               std::shared_ptr<const ContactRoad> road,
+                                               const ReadingSettings& readings) const override {
+    return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road), readings);
+  }
   std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
                                                const ModelParameters& p) const override {
     FullCarBumpSettings b;

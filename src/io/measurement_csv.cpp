@@ -1,5 +1,6 @@
 #include "pc_ekf/io/measurement_csv.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <iomanip>
@@ -52,8 +53,11 @@ double parseCell(const std::string& raw, bool missing_ok, const std::string& sou
 }
 
 // Reads header + rows of numbers; the first column is time, strictly increasing.
+// With `any_columns` the header is t and any distinct columns of `header`
+// (after its first), in any order, and `header` is replaced by the file's.
 std::vector<std::vector<double>> readTable(std::istream& in, const std::string& source,
-                                           const std::vector<std::string>& header, bool missing_ok) {
+                                           std::vector<std::string>& header, bool missing_ok,
+                                           bool any_columns = false) {
   std::string line;
   int number = 0;
   std::string expected;
@@ -64,6 +68,20 @@ std::vector<std::vector<double>> readTable(std::istream& in, const std::string& 
   }
   std::vector<std::string> got = splitCells(line);
   for (auto& g : got) g = trim(g);
+  if (any_columns && !got.empty() && got[0] == header[0]) {
+    for (std::size_t i = 1; i < got.size(); ++i) {
+      const bool known = std::find(header.begin() + 1, header.end(), got[i]) != header.end();
+      const bool repeated = std::find(got.begin() + 1, got.begin() + static_cast<long>(i),
+                                      got[i]) != got.begin() + static_cast<long>(i);
+      if (!known || repeated) {
+        fail(source, number, "column '" + got[i] + "' " + (known ? "repeated" : "unknown") +
+                                 ": expected t, then any of '" + expected.substr(2) + "'");
+      }
+    }
+    if (got.size() < 2) fail(source, number, "no channel column after t");
+    header = got;
+    expected = trim(line);
+  }
   if (got != header) fail(source, number, "header '" + trim(line) + "', expected '" + expected + "'");
   std::vector<std::vector<double>> rows;
   while (std::getline(in, line)) {
@@ -106,15 +124,22 @@ MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source
   MeasurementSeries series;
   std::vector<std::string> header{"t"};
   header.insert(header.end(), channels.begin(), channels.end());
-  const int count = static_cast<int>(channels.size());
-  for (const auto& row : readTable(in, source, header, true)) {
+  const auto rows = readTable(in, source, header, true, true);
+  // The file's columns in the model's channel order.
+  std::vector<std::pair<int, int>> order;  // (model channel, file column)
+  for (std::size_t col = 1; col < header.size(); ++col) {
+    const auto it = std::find(channels.begin(), channels.end(), header[col]);
+    order.emplace_back(static_cast<int>(it - channels.begin()), static_cast<int>(col));
+  }
+  std::sort(order.begin(), order.end());
+  for (const auto& row : rows) {
     Measurement m;
     m.time = row[0];
     std::vector<double> values;
-    for (int c = 0; c < count; ++c) {
-      if (std::isnan(row[c + 1])) continue;
+    for (const auto& [c, col] : order) {
+      if (std::isnan(row[static_cast<std::size_t>(col)])) continue;
       m.channels.push_back(c);
-      values.push_back(row[c + 1]);
+      values.push_back(row[static_cast<std::size_t>(col)]);
     }
     m.values = Eigen::Map<Eigen::VectorXd>(values.data(), values.size());
     series.push_back(m);
@@ -130,13 +155,24 @@ MeasurementSeries readMeasurementCsvFile(const std::string& path,
 
 void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series,
                          const std::vector<std::string>& channels) {
+  // The channels the series has (a model's IMU channels only when read).
+  std::vector<bool> present(channels.size(), false);
+  for (const auto& m : series) {
+    for (int c : m.channels) {
+      if (c >= 0 && c < static_cast<int>(present.size())) present[static_cast<std::size_t>(c)] = true;
+    }
+  }
+  if (series.empty()) present.assign(channels.size(), true);
   out << "t";
-  for (const auto& name : channels) out << ',' << name;
+  for (std::size_t c = 0; c < channels.size(); ++c) {
+    if (present[c]) out << ',' << channels[c];
+  }
   out << '\n' << std::setprecision(17);
   const int count = static_cast<int>(channels.size());
   for (const auto& m : series) {
     out << m.time;
     for (int c = 0; c < count; ++c) {
+      if (!present[static_cast<std::size_t>(c)]) continue;
       out << ',';
       for (std::size_t i = 0; i < m.channels.size(); ++i) {
         if (m.channels[i] == c) out << m.values[i];

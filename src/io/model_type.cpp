@@ -59,6 +59,16 @@ std::shared_ptr<const ContactRoad> ModelType::speedBump(const SpeedBumpSettings&
   }
 }
 
+std::shared_ptr<const MechanicalModel> ModelType::build(const ModelParameters& parameters,
+                                                        std::shared_ptr<const ContactRoad> road,
+                                                        const ReadingSettings& readings) const {
+  if (readings.as_states || readings.zero != ZeroConvention::kRest) {
+    throw std::invalid_argument(name() + ": reads its channels as deviations from rest only " +
+                                "(no IMU channels, no measurement.zero: tare)");
+  }
+  return build(parameters, std::move(road));
+}
+
 std::shared_ptr<ModelParameters> ModelType::defaults() const {
   return std::make_shared<ModelParameters>(ModelParameters::defaults(description()));
 }
@@ -68,6 +78,17 @@ std::shared_ptr<ModelParameters> ModelType::read(YamlMapReader& r,
   const ModelDescription& d = description();
   auto out = std::make_shared<ModelParameters>(base);
   readTable(r, d.parameters(), out->values);
+  // An entry that follows another (e.g. midway between the mounts) keeps
+  // following it when it is not configured and still followed it in `base`.
+  const ParameterTable& table = d.parameters();
+  for (int i = 0; i < table.size(); ++i) {
+    const ParameterSpec& spec = table[i];
+    if (spec.default_fraction_of.empty() || r.has(spec.name)) continue;
+    const int of = table.at(spec.default_fraction_of);
+    if (base.values[i] == spec.default_fraction * base.values[of]) {
+      out->values[i] = spec.default_fraction * out->values[of];
+    }
+  }
   for (std::size_t c = 0; c < d.choices().size(); ++c) {
     const ChoiceSpec& spec = d.choices()[c];
     std::string& value = out->choices[c];

@@ -28,6 +28,12 @@ class ModelType {
   // Throws std::invalid_argument when the road has the wrong contact count.
   virtual std::shared_ptr<const MechanicalModel> build(
       const ModelParameters& parameters, std::shared_ptr<const ContactRoad> road) const = 0;
+  // The same, reading as `readings` says (IMU channels, measurement.zero).
+  // Default: the model above for the paper's convention; a model without
+  // readings as states throws std::invalid_argument for anything else.
+  virtual std::shared_ptr<const MechanicalModel> build(const ModelParameters& parameters,
+                                                       std::shared_ptr<const ContactRoad> road,
+                                                       const ReadingSettings& readings) const;
   // The analytic speed bump under this model's contacts (road.speed_bump).
   // Default: one contact takes the left track, two take left and right;
   // other counts throw std::invalid_argument (override it).

@@ -16,6 +16,11 @@ class RollPlaneType : public ModelType {
                                                std::shared_ptr<const ContactRoad> road) const override {
     return std::make_shared<RollPlaneModel>(VehicleParameters::from(p), std::move(road));
   }
+  std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
+                                               std::shared_ptr<const ContactRoad> road,
+                                               const ReadingSettings& readings) const override {
+    return std::make_shared<RollPlaneModel>(VehicleParameters::from(p), std::move(road), readings);
+  }
   std::string equilibriumSummary(const ModelParameters& laws,
                                  const Eigen::VectorXd& values) const override {
     const VehicleParameters p =

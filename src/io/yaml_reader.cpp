@@ -47,6 +47,10 @@ YamlMapReader YamlMapReader::map(const std::string& key) {
   return YamlMapReader(child, keyPath(key), source_);
 }
 
+bool YamlMapReader::isSequence(const std::string& key) const {
+  return has(key) && node_[key].IsSequence();
+}
+
 YAML::Node YamlMapReader::sequence(const std::string& key) {
   read_.insert(key);
   if (!has(key)) return YAML::Node();

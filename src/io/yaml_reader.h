@@ -20,6 +20,7 @@ class YamlMapReader {
 
   bool has(const std::string& key) const;
   bool isMap(const std::string& key) const;  // present and a map
+  bool isSequence(const std::string& key) const;  // present and a list
   bool empty() const { return !node_.IsMap() || node_.size() == 0; }
   YamlMapReader map(const std::string& key);  // absent -> empty map
   YAML::Node sequence(const std::string& key);  // absent -> null node

@@ -58,6 +58,10 @@ const std::vector<Entry>& parameterEntries() {
       {{"added_mass_y", "m", 0.75, withinSumOf({"track_width"}),
         "position of M left of the right wheels' line"},
        PC_EKF_FIELD(added_mass_y)},
+      {{"imu_x", "m", 0.0, anyValue(), "IMU mount forward of the body's centre O (default: at O)"},
+       PC_EKF_FIELD(imu_x)},
+      {{"imu_y", "m", 0.0, anyValue(), "IMU mount left of the body's centre O (default: at O)"},
+       PC_EKF_FIELD(imu_y)},
   };
   return e;
 }
@@ -113,7 +117,13 @@ const ModelDescription& fullCarDescription() {
        {"v_fl", "m/s", "extension rate, front left"},
        {"v_fr", "m/s", "extension rate, front right"},
        {"v_rl", "m/s", "extension rate, rear left"},
-       {"v_rr", "m/s", "extension rate, rear right"}},
+       {"v_rr", "m/s", "extension rate, rear right"},
+       {"accel_y", "m/s^2", "IMU specific force along body y (left): (g + a) cos(pitch) sin(phi)",
+        false},
+       {"accel_z", "m/s^2", "IMU specific force along body z (up): (g + a) cos(pitch) cos(phi)",
+        false},
+       {"gyro_x", "rad/s", "IMU roll rate (phi > 0: left side up)", false},
+       {"gyro_y", "rad/s", "IMU pitch rate (REP 103: nose down > 0, i.e. -thetadot)", false}},
       {{"front_left", "", "front left tyre"},
        {"front_right", "", "front right tyre"},
        {"rear_left", "", "rear left tyre"},

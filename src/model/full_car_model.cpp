@@ -12,6 +12,15 @@
 
 namespace pc_ekf {
 
+// What each point's readings need beyond its dynamics (readings as states).
+struct FullCarReadings {
+  Eigen::ArrayXXd corner_x, corner_y;  // 4 x Q, the point's own geometry
+  Eigen::ArrayXXd travel_offset;       // 4 x Q, subtracted from u_i: 0 (rest); sag (tare)
+  Eigen::ArrayXd imu_x, imu_y, gravity;
+  Eigen::ArrayXd roll_static, pitch_static;  // phi_s, and REP 103 pitch -theta_s
+  Eigen::ArrayXd rest_y, rest_z;              // static specific force (rest); 0 (tare)
+};
+
 namespace {
 
 // A direct-mapped table of the thread's latest equilibria, keyed by the model
@@ -138,15 +147,47 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) void transposedDeriv
 class FullCarBatch : public ModelBatch {
  public:
   FullCarBatch(PointConstants c, DamperLaw law, double tanh_rate,
-               std::shared_ptr<const ContactRoad> road)
-      : c_(std::move(c)), p_(c_), law_(law), tanh_rate_(tanh_rate), road_(std::move(road)) {}
+               std::shared_ptr<const ContactRoad> road,
+               std::unique_ptr<FullCarReadings> readings = nullptr)
+      : c_(std::move(c)),
+        p_(c_),
+        law_(law),
+        tanh_rate_(tanh_rate),
+        road_(std::move(road)),
+        r_(std::move(readings)) {}
   FullCarBatch(const FullCarBatch&) = delete;
   FullCarBatch& operator=(const FullCarBatch&) = delete;
 
   int pointCount() const override { return static_cast<int>(c_.size()); }
 
   Eigen::ArrayXXd initialState() const override {
-    return Eigen::ArrayXXd::Zero(14, pointCount());  // the static equilibrium
+    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(r_ ? 26 : 14, pointCount());  // the equilibrium
+    if (r_) readings(0.0, y);
+    return y;
+  }
+
+  // Rows 14..25: u_fl .. u_rr, v_fl .. v_rr, accel_y, accel_z, gyro_x, gyro_y.
+  void readings(double t, Eigen::ArrayXXd& y) const override {
+    if (!r_) return;
+    thread_local Eigen::ArrayXXd dynamic, rates;
+    dynamic = y.topRows(14);
+    derivatives(t, dynamic, rates);
+    const FullCarReadings& r = *r_;
+    for (Eigen::Index q = 0; q < pointCount(); ++q) {
+      for (int i = 0; i < 4; ++i) {
+        const double x = r.corner_x(i, q), yc = r.corner_y(i, q);
+        y(14 + i, q) = y(0, q) + x * y(1, q) + yc * y(2, q) - y(3 + i, q) - r.travel_offset(i, q);
+        y(18 + i, q) = y(7, q) + x * y(8, q) + yc * y(9, q) - y(10 + i, q);
+      }
+      const double a = rates(7, q) + r.imu_x[q] * rates(8, q) + r.imu_y[q] * rates(9, q);
+      const double roll = r.roll_static[q] + y(2, q);
+      const double pitch = r.pitch_static[q] - y(1, q);
+      const double specific = (r.gravity[q] + a) * std::cos(pitch);
+      y(22, q) = specific * std::sin(roll) - r.rest_y[q];
+      y(23, q) = specific * std::cos(roll) - r.rest_z[q];
+      y(24, q) = y(9, q);
+      y(25, q) = -y(8, q);
+    }
   }
 
   void derivatives(double t, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const override {
@@ -188,6 +229,7 @@ class FullCarBatch : public ModelBatch {
   DamperLaw law_;
   double tanh_rate_;
   std::shared_ptr<const ContactRoad> road_;
+  std::unique_ptr<FullCarReadings> r_;  // null: readings not kept as states
 };
 
 void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, double damper_scale,
@@ -223,12 +265,16 @@ void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, doubl
 }  // namespace
 
 FullCarModel::FullCarModel(const FullCarParameters& nominal,
-                           std::shared_ptr<const ContactRoad> road)
+                           std::shared_ptr<const ContactRoad> road, ReadingSettings readings)
     : nominal_(nominal),
+      readings_(readings),
+      state_names_(fullCarDescription().stateNames()),
       nominal_vector_(nominal.toVector()),
       id_(next_model_id++),
-      h_(Eigen::MatrixXd::Zero(8, 14)),
+      h_(Eigen::MatrixXd::Zero(12, 14)),
       road_(std::move(road)) {
+  // Tare offsets depend on each point's parameters: readings as states.
+  if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
   if (!road_) throw std::invalid_argument("FullCarModel: no road input");
   if (road_->contactCount() != 4) {
     throw std::invalid_argument("FullCarModel: the road must have 4 contacts, got " +
@@ -241,7 +287,16 @@ FullCarModel::FullCarModel(const FullCarParameters& nominal,
         nominal_.damper_tanh_scale >= 0.0 && nominal_.damper_tanh_rate >= 0.0)) {
     throw std::invalid_argument("FullCarModel: damper tanh scale and rate must be finite, >= 0");
   }
-  // u_i = z + x_i theta + y_i phi - zu_i and its rate, with the nominal geometry.
+  if (readings_.as_states) {
+    for (const std::string& c : fullCarDescription().channelNames()) {
+      state_names_.push_back("reading_" + c);
+    }
+    h_ = Eigen::MatrixXd::Zero(12, 26);
+    h_.rightCols(12).setIdentity();
+    return;
+  }
+  // u_i = z + x_i theta + y_i phi - zu_i and its rate, with the nominal
+  // geometry; the IMU rows stay zero (channelModelled is false for them).
   for (int i = 0; i < 4; ++i) {
     const double x = nominal_.cornerX(i), y = nominal_.cornerY(i);
     for (int rate = 0; rate < 2; ++rate) {
@@ -303,8 +358,49 @@ std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params)
     }
     setConstants(p, e, scale, q, points);
   }
+  std::unique_ptr<FullCarReadings> r;
+  if (readings_.as_states) r = readingConstants(params);
   return std::make_unique<FullCarBatch>(std::move(points), nominal_.damper,
-                                        nominal_.damper_tanh_rate, road_);
+                                        nominal_.damper_tanh_rate, road_, std::move(r));
+}
+
+std::unique_ptr<FullCarReadings> FullCarModel::readingConstants(const Eigen::MatrixXd& params) const {
+  const Eigen::Index count = params.cols();
+  auto r = std::make_unique<FullCarReadings>();
+  r->corner_x.resize(4, count);
+  r->corner_y.resize(4, count);
+  r->travel_offset = Eigen::ArrayXXd::Zero(4, count);
+  for (Eigen::ArrayXd* a : {&r->imu_x, &r->imu_y, &r->gravity, &r->roll_static, &r->pitch_static,
+                            &r->rest_y, &r->rest_z}) {
+    a->resize(count);
+  }
+  const bool tare = readings_.zero == ZeroConvention::kTare;
+  const int added_mass = description().parameters().at("added_mass");
+  for (Eigen::Index q = 0; q < count; ++q) {
+    const FullCarParameters p = FullCarParameters::fromVector(params.col(q), nominal_);
+    const FullCarEquilibrium e = equilibrium(params.col(q));
+    for (int i = 0; i < 4; ++i) {
+      r->corner_x(i, q) = p.cornerX(i);
+      r->corner_y(i, q) = p.cornerY(i);
+    }
+    r->imu_x[q] = p.imu_x;
+    r->imu_y[q] = p.imu_y;
+    r->gravity[q] = p.gravity;
+    r->roll_static[q] = e.roll;
+    r->pitch_static[q] = -e.pitch;
+    const double level = p.gravity * std::cos(-e.pitch);
+    r->rest_y[q] = tare ? 0.0 : level * std::sin(e.roll);
+    r->rest_z[q] = tare ? 0.0 : level * std::cos(e.roll);
+    if (!tare) continue;
+    // Zeroed on the empty vehicle: the same vehicle without the load.
+    Eigen::VectorXd unloaded = params.col(q);
+    unloaded[added_mass] = 0.0;
+    const FullCarEquilibrium empty = equilibrium(unloaded);
+    for (int i = 0; i < 4; ++i) {
+      r->travel_offset(i, q) = e.spring_compression[i] - empty.spring_compression[i];
+    }
+  }
+  return r;
 }
 
 std::vector<double> FullCarModel::breakpoints(double t0, double t1) const {

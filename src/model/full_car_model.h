@@ -12,7 +12,11 @@
 // State (deviations from the static equilibrium):
 //   [z, theta, phi, zu_fl, zu_fr, zu_rl, zu_rr, and their rates] (14)
 // Channels: u_fl u_fr u_rl u_rr (suspension extension z_i - zu_i) and their
-// rates v_fl .. v_rr. The observation matrix is fixed, so it uses the nominal
+// rates v_fl .. v_rr, then the IMU's accel_y accel_z gyro_x gyro_y (REP 103
+// body axes; its pitch, nose down > 0, is -theta). The IMU channels and the
+// tare convention need the readings kept as states (ReadingSettings): then
+// 12 reading rows follow the 14 dynamic states, each corner's extension with
+// the point's own geometry, and H selects them. Otherwise: The observation matrix is fixed, so it uses the nominal
 // geometry (a, b, w): for a point whose a, b or w differ from the nominal,
 // H y is not that point's own extension once the body pitches or rolls.
 #pragma once
@@ -53,6 +57,7 @@ struct FullCarParameters {
   double added_mass{};    // M, kg
   double added_mass_x{};  // forward of the rear axle, m
   double added_mass_y{};  // left of the right wheels' line, m
+  double imu_x{}, imu_y{};  // IMU mount relative to O, m
   // Not in the vector: F_C = c * scale * tanh(rate * v), or F_C = c v.
   DamperLaw damper = DamperLaw::kTanh;
   double damper_tanh_scale{};  // m/s
@@ -97,11 +102,14 @@ struct FullCarEquilibrium {
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p);
 std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps);
 
+struct FullCarReadings;
+
 class FullCarModel : public MechanicalModel {
  public:
   // road: 4 contacts (front_left, front_right, rear_left, rear_right), else
   // std::invalid_argument.
-  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road);
+  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road,
+               ReadingSettings readings = {});
 
   const ModelDescription& description() const override { return fullCarDescription(); }
   const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
@@ -109,6 +117,14 @@ class FullCarModel : public MechanicalModel {
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
   std::vector<double> breakpoints(double t0, double t1) const override;
+
+  const std::vector<std::string>& stateNames() const override { return state_names_; }
+  int readingCount() const override { return readings_.as_states ? 12 : 0; }
+  bool channelModelled(int channel) const override {
+    return readings_.as_states || channel < kSuspensionChannels;
+  }
+  ZeroConvention zero() const override { return readings_.zero; }
+  static constexpr int kSuspensionChannels = 8;
 
   const FullCarParameters& nominal() const { return nominal_; }
   const ContactRoad& road() const { return *road_; }
@@ -121,7 +137,11 @@ class FullCarModel : public MechanicalModel {
   // Throws what solveFullCarEquilibrium throws.
   FullCarEquilibrium equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const;
 
+  std::unique_ptr<FullCarReadings> readingConstants(const Eigen::MatrixXd& params) const;
+
   FullCarParameters nominal_;
+  ReadingSettings readings_;
+  std::vector<std::string> state_names_;
   Eigen::VectorXd nominal_vector_;
   std::uint64_t id_;  // tells the memo's entries of two models apart
   Eigen::MatrixXd h_;

@@ -170,6 +170,13 @@ void integrateSegments(const std::vector<Segment>& segments, const Step& step_fn
 
 }  // namespace
 
+namespace {
+
+void integrateDynamic(const MechanicalModel& model, const ModelBatch& batch, double t0, double t1,
+                      Eigen::ArrayXXd& y, const IntegratorSettings& settings);
+
+}  // namespace
+
 void integrate(const MechanicalModel& model, const ModelBatch& batch, double t0, double t1,
                Eigen::ArrayXXd& y, const IntegratorSettings& settings) {
   if (!(t1 >= t0)) throw std::invalid_argument("integrate: t1 must be >= t0 (and not NaN)");
@@ -178,6 +185,23 @@ void integrate(const MechanicalModel& model, const ModelBatch& batch, double t0,
     throw std::invalid_argument("integrate: y must be stateSize() x pointCount()");
   }
   if (t1 == t0) return;
+  const int dynamic = model.dynamicStateSize();
+  if (dynamic == y.rows()) {
+    integrateDynamic(model, batch, t0, t1, y, settings);
+    return;
+  }
+  // Readings kept as states: advance the dynamic rows, then read at t1.
+  thread_local Eigen::ArrayXXd moving;
+  moving = y.topRows(dynamic);
+  integrateDynamic(model, batch, t0, t1, moving, settings);
+  y.topRows(dynamic) = moving;
+  batch.readings(t1, y);
+}
+
+namespace {
+
+void integrateDynamic(const MechanicalModel& model, const ModelBatch& batch, double t0, double t1,
+                      Eigen::ArrayXXd& y, const IntegratorSettings& settings) {
 
   // Segment ends: breakpoints strictly inside, merging those within round-off of an end.
   const double tol = 1e-12 * std::max(1.0, std::max(std::abs(t0), std::abs(t1)));
@@ -242,5 +266,7 @@ void integrate(const MechanicalModel& model, const ModelBatch& batch, double t0,
         y, work);
   }
 }
+
+}  // namespace
 
 }  // namespace pc_ekf

@@ -1,6 +1,7 @@
 #include "pc_ekf/model/mechanical_model.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 namespace pc_ekf {
 
@@ -10,6 +11,14 @@ void ModelBatch::derivativesTransposed(double t, const Eigen::ArrayXXd& y_t,
   Eigen::ArrayXXd dydt(y.rows(), y.cols());
   derivatives(t, y, dydt);
   dydt_t = dydt.transpose();
+}
+
+std::string toString(ZeroConvention z) { return z == ZeroConvention::kTare ? "tare" : "rest"; }
+
+ZeroConvention zeroConventionFromString(const std::string& name) {
+  if (name == "rest") return ZeroConvention::kRest;
+  if (name == "tare") return ZeroConvention::kTare;
+  throw std::invalid_argument("zero convention '" + name + "': expected rest or tare");
 }
 
 int MechanicalModel::parameterIndex(const std::string& name) const {

@@ -35,6 +35,33 @@ class ModelBatch {
   virtual bool hasTransposedDerivatives() const { return false; }
   virtual void derivativesTransposed(double t, const Eigen::ArrayXXd& y_t,
                                      Eigen::ArrayXXd& dydt_t) const;
+
+  // Readings kept as states (MechanicalModel::readingCount() > 0): fills the
+  // last readingCount() rows of y (stateSize() x pointCount()) with every
+  // channel's reading at t, from the dynamic rows above them. integrate()
+  // calls it at the end of every interval; initialState() includes them.
+  virtual void readings(double /*t*/, Eigen::ArrayXXd& /*y*/) const {}
+};
+
+// How readings are zeroed (measurement.zero), docs/method.md §1.6:
+//  kRest: every channel is a deviation from its value with the loaded vehicle
+//         at rest (the paper's convention);
+//  kTare: as the sensors give them: suspension travel from the empty vehicle
+//         at rest on level ground (the load's static sag is in the reading),
+//         the accelerometer raw (+g along z at rest, REP 145).
+enum class ZeroConvention { kRest, kTare };
+std::string toString(ZeroConvention z);
+// Throws std::invalid_argument for a name other than rest or tare.
+ZeroConvention zeroConventionFromString(const std::string& name);
+
+// What a model is asked to read: the zero convention, and whether its
+// readings are kept as states (needed for channels that are not a fixed
+// linear function of the dynamic states: IMU channels, tare offsets that
+// depend on the parameters). Without them a model is exactly its linear
+// observation of the dynamic states.
+struct ReadingSettings {
+  ZeroConvention zero = ZeroConvention::kRest;
+  bool as_states = false;
 };
 
 class MechanicalModel {
@@ -45,8 +72,17 @@ class MechanicalModel {
   // same object its ModelType returns).
   virtual const ModelDescription& description() const = 0;
 
-  int stateSize() const { return static_cast<int>(description().stateNames().size()); }
-  const std::vector<std::string>& stateNames() const { return description().stateNames(); }
+  int stateSize() const { return static_cast<int>(stateNames().size()); }
+  // The dynamic states (the description's), then one row per channel when
+  // the readings are kept as states.
+  virtual const std::vector<std::string>& stateNames() const { return description().stateNames(); }
+  // States the integrator advances; the rows after them are readings.
+  int dynamicStateSize() const { return stateSize() - readingCount(); }
+  virtual int readingCount() const { return 0; }
+  // False for a channel this model, as built, cannot give (e.g. an IMU
+  // channel when its readings are not kept as states).
+  virtual bool channelModelled(int /*channel*/) const { return true; }
+  virtual ZeroConvention zero() const { return ZeroConvention::kRest; }
 
   // Full parameter vector (every physical constant of the model), in the
   // order of description().parameters().

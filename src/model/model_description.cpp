@@ -33,6 +33,14 @@ int ModelDescription::channelIndex(const std::string& name) const {
   return -1;
 }
 
+std::vector<std::string> ModelDescription::defaultChannelNames() const {
+  std::vector<std::string> names;
+  for (const ChannelSpec& c : p_.channels) {
+    if (c.selected_by_default) names.push_back(c.name);
+  }
+  return names;
+}
+
 int ModelDescription::choiceIndex(const std::string& name) const {
   for (std::size_t i = 0; i < p_.choices.size(); ++i) {
     if (p_.choices[i].name == name) return static_cast<int>(i);

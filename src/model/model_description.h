@@ -18,6 +18,8 @@ struct ChannelSpec {
   std::string name;
   std::string unit;
   std::string description;
+  // In measurement.channels' default (false: an IMU channel, chosen by name).
+  bool selected_by_default = true;
 };
 
 // A road contact (a tyre): its name (pc_ekf/RoadHeights, the road CSV header
@@ -74,6 +76,8 @@ class ModelDescription {
   const std::vector<ChannelSpec>& channels() const { return p_.channels; }
   const std::vector<std::string>& channelNames() const { return channel_names_; }
   int channelIndex(const std::string& name) const;  // -1 when unknown
+  // The channels with selected_by_default, in channel order.
+  std::vector<std::string> defaultChannelNames() const;
   const std::vector<ContactSpec>& contacts() const { return p_.contacts; }
   const std::vector<std::string>& contactNames() const { return contact_names_; }
   const std::vector<std::string>& roadColumns() const { return road_columns_; }

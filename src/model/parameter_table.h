@@ -32,6 +32,10 @@ struct ParameterSpec {
   double default_value = 0.0;
   ParameterDomain domain;
   std::string description;  // one line
+  // Not configured: this fraction of another entry's configured value (e.g.
+  // an IMU midway between mounts whose spacing the user sets); "" = none.
+  std::string default_fraction_of{};
+  double default_fraction = 0.0;
 };
 
 // > 0, >= 0, any real, [0, sum of `parameters`].

@@ -60,6 +60,10 @@ const std::vector<Entry>& parameterEntries() {
       {{"added_mass_position", "m", 0.762, withinSumOf({"bar_length"}),
         "position d_CG of M from the left end"},
        PC_EKF_FIELD(added_mass_position)},
+      {{"imu_position", "m", 0.762, withinSumOf({"bar_length"}),
+        "IMU mount from the left end (not configured: midway between the mounts)",
+        "bar_length", 0.5},
+       PC_EKF_FIELD(imu_position)},
   };
   return e;
 }
@@ -110,7 +114,10 @@ const ModelDescription& rollPlaneDescription() {
       {{"u1", "m", "suspension extension x1 - xr1, left"},
        {"u2", "m", "suspension extension x2 - xr2, right"},
        {"v1", "m/s", "suspension extension rate, left"},
-       {"v2", "m/s", "suspension extension rate, right"}},
+       {"v2", "m/s", "suspension extension rate, right"},
+       {"accel_y", "m/s^2", "IMU specific force along body y (left): (g + a) sin(phi)", false},
+       {"accel_z", "m/s^2", "IMU specific force along body z (up): (g + a) cos(phi)", false},
+       {"gyro_x", "rad/s", "IMU roll rate (phi > 0: left side up)", false}},
       {{"left", "y1", "left tyre"}, {"right", "y2", "right tyre"}},
       {{"left_suspension", "left", "u1", "v1"}, {"right_suspension", "right", "u2", "v2"}},
   });

@@ -12,6 +12,16 @@
 
 namespace pc_ekf {
 
+// What each point's readings need beyond its dynamics (readings as states).
+struct RollPlaneReadings {
+  Eigen::ArrayXd imu_fraction;      // s / L: a = (1 - s/L) x1dd + (s/L) x2dd
+  Eigen::ArrayXd inv_length;
+  Eigen::ArrayXd gravity;
+  Eigen::ArrayXd roll_static;       // phi_s = -theta_s (REP 103)
+  Eigen::ArrayXd rest_y, rest_z;    // subtracted: g sin(phi_s), g cos(phi_s) (rest); 0 (tare)
+  Eigen::ArrayXXd travel_offset;    // 2 x Q, subtracted from u_i: 0 (rest); sag (tare)
+};
+
 namespace {
 
 // Raw views of the per-point constants for the vectorised loop, one array per
@@ -179,19 +189,47 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) bool soaDerivativesD
 class RollPlaneBatch : public ModelBatch {
  public:
   RollPlaneBatch(PointConstants c, DamperLaw law, double tanh_rate,
-                 std::shared_ptr<const ContactRoad> road)
+                 std::shared_ptr<const ContactRoad> road,
+                 std::unique_ptr<RollPlaneReadings> readings = nullptr)
       : c_(std::move(c)),
         p_(c_.pointers()),
         law_(law),
         tanh_rate_(tanh_rate),
-        road_(std::move(road)) {}
+        road_(std::move(road)),
+        r_(std::move(readings)) {}
   RollPlaneBatch(const RollPlaneBatch&) = delete;
   RollPlaneBatch& operator=(const RollPlaneBatch&) = delete;
 
   int pointCount() const override { return static_cast<int>(c_.size()); }
 
   Eigen::ArrayXXd initialState() const override {
-    return Eigen::ArrayXXd::Zero(8, pointCount());  // equilibrium (docs/method.md §1.4)
+    // The equilibrium (docs/method.md §1.4), and its readings.
+    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(r_ ? 15 : 8, pointCount());
+    if (r_) readings(0.0, y);
+    return y;
+  }
+
+  // Rows 8..14: u1 u2 v1 v2 accel_y accel_z gyro_x (docs/method.md §1.6).
+  void readings(double t, Eigen::ArrayXXd& y) const override {
+    if (!r_) return;
+    const Eigen::Index n = pointCount();
+    thread_local Eigen::ArrayXXd dynamic, rates;
+    dynamic = y.topRows(8);
+    derivatives(t, dynamic, rates);
+    const RollPlaneReadings& r = *r_;
+    for (Eigen::Index q = 0; q < n; ++q) {
+      for (int i = 0; i < 2; ++i) {
+        y(8 + i, q) = y(i, q) - y(2 + i, q) - r.travel_offset(i, q);
+        y(10 + i, q) = y(4 + i, q) - y(6 + i, q);
+      }
+      // Vertical acceleration of the IMU point, and the roll (left up > 0).
+      const double a = (1.0 - r.imu_fraction[q]) * rates(4, q) + r.imu_fraction[q] * rates(5, q);
+      const double phi = r.roll_static[q] - (y(1, q) - y(0, q)) * r.inv_length[q];
+      const double specific = r.gravity[q] + a;
+      y(12, q) = specific * std::sin(phi) - r.rest_y[q];
+      y(13, q) = specific * std::cos(phi) - r.rest_z[q];
+      y(14, q) = -(y(5, q) - y(4, q)) * r.inv_length[q];
+    }
   }
 
   void derivatives(double t, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const override {
@@ -246,17 +284,22 @@ class RollPlaneBatch : public ModelBatch {
   DamperLaw law_;
   double tanh_rate_;
   std::shared_ptr<const ContactRoad> road_;
+  std::unique_ptr<RollPlaneReadings> r_;  // null: readings not kept as states
 };
 
 
 }  // namespace
 
 RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
-                               std::shared_ptr<const ContactRoad> road)
+                               std::shared_ptr<const ContactRoad> road, ReadingSettings readings)
     : nominal_(nominal),
+      readings_(readings),
+      state_names_(rollPlaneDescription().stateNames()),
       nominal_vector_(nominal.toVector()),
-      h_(Eigen::MatrixXd::Zero(4, 8)),
+      h_(Eigen::MatrixXd::Zero(7, 8)),
       road_(std::move(road)) {
+  // Tare offsets depend on each point's parameters: readings as states.
+  if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
   if (!road_) throw std::invalid_argument("RollPlaneModel: no road input");
   if (road_->contactCount() != 2) {
     throw std::invalid_argument("RollPlaneModel: a road under two contacts expected, got " +
@@ -269,7 +312,17 @@ RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
         nominal_.damper_tanh_scale >= 0.0 && nominal_.damper_tanh_rate >= 0.0)) {
     throw std::invalid_argument("RollPlaneModel: damper tanh scale and rate must be finite, >= 0");
   }
-  // u_i = x_i - xr_i, v_i = xidot - xridot (docs/method.md §1.6).
+  if (readings_.as_states) {
+    // Each channel's reading is a state row after the dynamic ones.
+    for (const std::string& c : rollPlaneDescription().channelNames()) {
+      state_names_.push_back("reading_" + c);
+    }
+    h_ = Eigen::MatrixXd::Zero(7, 15);
+    h_.rightCols(7).setIdentity();
+    return;
+  }
+  // u_i = x_i - xr_i, v_i = xidot - xridot (docs/method.md §1.6); the IMU
+  // rows stay zero (channelModelled is false for them).
   for (int i = 0; i < 2; ++i) {
     h_(i, i) = 1.0;
     h_(i, 2 + i) = -1.0;
@@ -385,8 +438,48 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
     c(q, C::kCosStatic) = cos_static;
     c(q, C::kSinStatic) = slope * cos_static;
   }
+  std::unique_ptr<RollPlaneReadings> r;
+  if (readings_.as_states) r = readingConstants(points, equilibria);
   return std::make_unique<RollPlaneBatch>(std::move(c), nominal_.damper, nominal_.damper_tanh_rate,
-                                          road_);
+                                          road_, std::move(r));
+}
+
+std::unique_ptr<RollPlaneReadings> RollPlaneModel::readingConstants(
+    const std::vector<VehicleParameters>& points,
+    const std::vector<StaticEquilibrium>& equilibria) const {
+  const Eigen::Index count = static_cast<Eigen::Index>(points.size());
+  auto r = std::make_unique<RollPlaneReadings>();
+  r->imu_fraction.resize(count);
+  r->inv_length.resize(count);
+  r->gravity.resize(count);
+  r->roll_static.resize(count);
+  r->rest_y.resize(count);
+  r->rest_z.resize(count);
+  r->travel_offset = Eigen::ArrayXXd::Zero(2, count);
+  const bool tare = readings_.zero == ZeroConvention::kTare;
+  std::vector<StaticEquilibrium> empty;
+  if (tare) {
+    // The sensors were zeroed on the empty vehicle: the same vehicle, no load.
+    std::vector<VehicleParameters> unloaded = points;
+    for (VehicleParameters& p : unloaded) p.added_mass = 0.0;
+    empty = solveStaticEquilibria(unloaded);
+  }
+  for (Eigen::Index q = 0; q < count; ++q) {
+    const VehicleParameters& p = points[static_cast<std::size_t>(q)];
+    const StaticEquilibrium& e = equilibria[static_cast<std::size_t>(q)];
+    r->imu_fraction[q] = p.imu_position / p.bar_length;
+    r->inv_length[q] = 1.0 / p.bar_length;
+    r->gravity[q] = p.gravity;
+    r->roll_static[q] = -e.roll_angle;
+    r->rest_y[q] = tare ? 0.0 : p.gravity * std::sin(-e.roll_angle);
+    r->rest_z[q] = tare ? 0.0 : p.gravity * std::cos(-e.roll_angle);
+    for (int i = 0; i < 2 && tare; ++i) {
+      // Extension positive: the load's extra compression reads negative.
+      r->travel_offset(i, q) = e.spring_compression[i] -
+                               empty[static_cast<std::size_t>(q)].spring_compression[i];
+    }
+  }
+  return r;
 }
 
 std::vector<double> RollPlaneModel::breakpoints(double t0, double t1) const {

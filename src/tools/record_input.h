@@ -38,6 +38,11 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   r.model = makeModel(config, makeRoad(config, bag_road));
   if (!csv.empty()) r.series = readMeasurementCsvFile(csv, config.model_type->channelNames());
   if (bag.empty() && csv.empty()) r.series = synthesizeFromConfig(config, *r.model, seed);
+  // A recording may hold more channels than measurement.channels selects.
+  const std::vector<int> selected = channelIndices(config);
+  if (selected.size() < config.model_type->channelNames().size()) {
+    r.series = onlyChannels(r.series, selected);
+  }
   return r;
 }
 
