@@ -16,12 +16,21 @@ Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
       relative[i] = (channel_relative[c] * m.values[i]) * (channel_relative[c] * m.values[i]);
     }
   }
-  if (rule == NoiseRule::kPaper) return relative.max(r_floor).matrix();
   Eigen::VectorXd v(m.values.size());
-  for (Eigen::Index i = 0; i < v.size(); ++i) {
-    const int c = m.channels[static_cast<std::size_t>(i)];
-    if (c < 0 || c >= channel_std.size()) throw std::invalid_argument("noise: no sensor std for channel");
-    v[i] = channel_std[c] * channel_std[c] + relative[i];
+  if (rule == NoiseRule::kPaper) {
+    v = relative.max(r_floor).matrix();
+  } else {
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      const int c = m.channels[static_cast<std::size_t>(i)];
+      if (c < 0 || c >= channel_std.size()) throw std::invalid_argument("noise: no sensor std for channel");
+      v[i] = channel_std[c] * channel_std[c] + relative[i];
+    }
+  }
+  if (channel_extra_variance.size() != 0) {
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      const int c = m.channels[static_cast<std::size_t>(i)];
+      if (c >= 0 && c < channel_extra_variance.size()) v[i] += channel_extra_variance[c];
+    }
   }
   return v;
 }

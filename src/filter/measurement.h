@@ -35,6 +35,9 @@ struct NoiseModel {
   // One r_relative per model channel (empty: r_relative for every channel):
   // an IMU's noise does not grow with the 9.81 of gravity in its reading.
   Eigen::VectorXd channel_relative;
+  // Added to R_jj per model channel (empty: nothing): what a reading inherits
+  // from the noise of readings used as inputs (road-free, errors in variables).
+  Eigen::VectorXd channel_extra_variance;
   Eigen::VectorXd variances(const Measurement& m) const;
   // Over a whole record, stacked in sample order.
   Eigen::VectorXd stackedVariances(const std::vector<Measurement>& series) const;

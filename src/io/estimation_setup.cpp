@@ -1,15 +1,129 @@
 #include "pc_ekf/io/estimation_setup.h"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "pc_ekf/io/measurement_csv.h"
+#include "pc_ekf/model/roll_plane_road_free.h"
 
 namespace pc_ekf {
+
+namespace {
+
+std::shared_ptr<const ContactRoad> roadOf(const EstimatorConfig& c, const RoadConfig& road);
+
+}  // namespace
 
 std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
                                             std::shared_ptr<const ContactRoad> sampled) {
   if (sampled) return sampled;
+  if (c.road.source == RoadSource::kNone) {
+    throw std::invalid_argument(c.source + ": road.source is none: the road-free model is built "
+                                "from the record (makeRoadFreeModel)");
+  }
+  return roadOf(c, c.road);
+}
+
+RoadFreeRecord roadFreeRecord(EstimatorConfig& c, const MeasurementSeries& record) {
+  const ModelType& type = *c.model_type;
+  const ModelType::RoadFreeInputs wanted = type.roadFreeInputs();
+  const auto& channels = type.channelNames();
+  const auto indexOf = [&](const std::string& name) {
+    return static_cast<int>(std::find(channels.begin(), channels.end(), name) - channels.begin());
+  };
+  std::vector<std::string> names = wanted.required;
+  for (const std::string& o : wanted.optional) {
+    const int ch = indexOf(o);
+    const bool read = std::any_of(record.begin(), record.end(), [&](const Measurement& m) {
+      return std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end();
+    });
+    if (read) names.push_back(o);
+  }
+  std::vector<double> times;
+  std::vector<std::vector<double>> columns(names.size());
+  for (const Measurement& m : record) {
+    times.push_back(m.time);
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const int ch = indexOf(names[i]);
+      double v = std::numeric_limits<double>::quiet_NaN();
+      for (std::size_t j = 0; j < m.channels.size(); ++j) {
+        if (m.channels[j] == ch) v = m.values[static_cast<Eigen::Index>(j)];
+      }
+      columns[i].push_back(v);
+    }
+  }
+  std::shared_ptr<const ReadingInputs> inputs;
+  try {
+    inputs = std::make_shared<const ReadingInputs>(names, times, columns);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(c.source + ": road.source none: " + e.what());
+  }
+  RoadFreeRecord r;
+  try {
+    r.model = type.buildRoadFree(*c.modelParameters(), inputs, c.measurement.zero);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(c.source + ": key 'road.source': " + e.what());
+  }
+  std::vector<int> outputs;
+  for (int ch : channelIndices(c)) {
+    if (r.model->channelIsInput(ch)) continue;
+    if (!r.model->channelModelled(ch)) {
+      throw ConfigError(c.source + ": key 'measurement.channels': road-free model " + type.name() +
+                        " cannot predict '" + channels[static_cast<std::size_t>(ch)] +
+                        "' from this record (its inputs: " + std::to_string(names.size()) + ")");
+    }
+    outputs.push_back(ch);
+  }
+  if (outputs.empty()) {
+    throw ConfigError(c.source + ": key 'measurement.channels': road.source none needs an IMU "
+                      "channel to predict (the suspension readings are its inputs)");
+  }
+  r.outputs = onlyChannels(record, outputs);
+  // Each input's noise from the config's rule: an absolute and a relative part.
+  const NoiseModel noise = makeNoiseModel(c);
+  Eigen::VectorXd absolute(static_cast<Eigen::Index>(names.size())), relative(absolute.size());
+  for (std::size_t i = 0; i < names.size(); ++i) {
+    const int ch = indexOf(names[i]);
+    const auto e = static_cast<Eigen::Index>(i);
+    relative[e] = noise.channel_relative.size() != 0 ? noise.channel_relative[ch] : noise.r_relative;
+    absolute[e] = noise.rule == NoiseRule::kSensor ? noise.channel_std[ch] : std::sqrt(noise.r_floor);
+  }
+  double accel_z = 0.0;
+  long count = 0;
+  const int az = indexOf("accel_z");
+  for (const Measurement& m : record) {
+    for (std::size_t j = 0; j < m.channels.size(); ++j) {
+      if (m.channels[j] != az) continue;
+      accel_z += m.values[static_cast<Eigen::Index>(j)];
+      ++count;
+    }
+  }
+  const auto* road_free = dynamic_cast<const RollPlaneRoadFreeModel*>(r.model.get());
+  if (road_free) {
+    const Eigen::VectorXd v =
+        road_free->inputNoiseVariance(absolute, relative, count > 0 ? accel_z / count : 0.0);
+    c.measurement.input_noise_variance.assign(v.data(), v.data() + v.size());
+  }
+  return r;
+}
+
+std::shared_ptr<const ContactRoad> makeTruthRoad(const EstimatorConfig& c) {
+  if (c.truth.road) return roadOf(c, *c.truth.road);
+  if (c.road.source == RoadSource::kNone) {
+    throw ConfigError(c.source + ": key 'truth.road': road.source is none, so a synthetic drive " +
+                      "needs the road the truth drives on (e.g. truth: {road: {source: iso8608}}); " +
+                      "or give the drive with --measurements or --bag");
+  }
+  return makeRoad(c);
+}
+
+namespace {
+
+std::shared_ptr<const ContactRoad> roadOf(const EstimatorConfig& cfg, const RoadConfig& road) {
+  EstimatorConfig c = cfg;
+  c.road = road;
   const ModelType& type = *c.model_type;
   const auto needTwo = [&](const char* source) {
     if (type.twoContacts()) return;
@@ -29,10 +143,26 @@ std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
       }
     }
     case RoadSource::kCourse: needTwo("course"); return std::make_shared<CourseRoad>(c.road.course);
+    case RoadSource::kIso8608:
+      return type.drivenProfile(std::make_shared<Iso8608Profile>(c.road.iso8608),
+                                c.road.speed_kmh / 3.6, *c.modelParameters());
+    case RoadSource::kProfile: {
+      std::shared_ptr<const MeasuredProfile> profile;
+      try {
+        profile = readMeasuredProfileCsv(c.road.profile_file);
+      } catch (const std::invalid_argument& e) {
+        throw ConfigError(c.source + ": key 'road.profile.file': " + e.what());
+      }
+      return type.drivenProfile(profile, c.road.speed_kmh / 3.6, *c.modelParameters());
+    }
     case RoadSource::kTopic: break;
+    case RoadSource::kNone: break;
   }
-  throw std::invalid_argument(c.source + ": road.source is topic but no road samples were given");
+  throw std::invalid_argument(c.source + ": road.source is " + toString(c.road.source) +
+                              " but no road samples were given");
 }
+
+}  // namespace
 
 std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
                                                  std::shared_ptr<const ContactRoad> road) {
@@ -123,6 +253,8 @@ NoiseModel makeNoiseModel(const EstimatorConfig& c) {
                                                     c.measurement.sensor_std.size());
   n.channel_relative = Eigen::Map<const Eigen::VectorXd>(
       c.measurement.r_relative_per_channel.data(), c.measurement.r_relative_per_channel.size());
+  n.channel_extra_variance = Eigen::Map<const Eigen::VectorXd>(
+      c.measurement.input_noise_variance.data(), c.measurement.input_noise_variance.size());
   return n;
 }
 
@@ -207,8 +339,17 @@ std::vector<int> channelIndices(const EstimatorConfig& c) {
 
 // The model the truth is simulated with on `road` (the estimator model's road
 // when none is given).
+std::shared_ptr<const MechanicalModel> truthOnItsRoad(const EstimatorConfig& c) {
+  return c.model_type->build(*c.truthModelParameters(), makeTruthRoad(c),
+                             c.measurement.readings(c.model_type->description()));
+}
+
 std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
                                                   const MechanicalModel& model) {
+  const ReadingSettings readings = c.measurement.readings(c.model_type->description());
+  // A road of its own (truth.road), or none in the estimator's model
+  // (road-free): the full model on the truth's road.
+  if (c.truth.road || c.road.source == RoadSource::kNone) return truthOnItsRoad(c);
   // Non-owning: the estimator's model is the caller's.
   if (!c.truth.model) {
     return std::shared_ptr<const MechanicalModel>(std::shared_ptr<void>(), &model);
@@ -216,8 +357,7 @@ std::shared_ptr<const MechanicalModel> truthModel(const EstimatorConfig& c,
   const ContactRoad* road = model.contactRoad();
   if (!road) throw ConfigError(c.source + ": key 'truth.vehicle': the model has no road to share");
   const std::shared_ptr<const ContactRoad> shared(std::shared_ptr<void>(), road);
-  return c.model_type->build(*c.truthModelParameters(), shared,
-                             c.measurement.readings(c.model_type->description()));
+  return c.model_type->build(*c.truthModelParameters(), shared, readings);
 }
 
 namespace {

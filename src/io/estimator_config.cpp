@@ -107,7 +107,34 @@ RoadConfig readRoad(YamlMapReader r) {
   else if (source == "series") road.source = RoadSource::kSeries;
   else if (source == "topic") road.source = RoadSource::kTopic;
   else if (source == "course") road.source = RoadSource::kCourse;
-  else r.fail("source", "'" + source + "'", "speed_bump, sine, series, topic or course");
+  else if (source == "iso8608") road.source = RoadSource::kIso8608;
+  else if (source == "profile") road.source = RoadSource::kProfile;
+  else if (source == "none") road.source = RoadSource::kNone;
+  else r.fail("source", "'" + source + "'",
+              "speed_bump, sine, series, topic, course, iso8608, profile or none");
+  r.number("speed_kmh", road.speed_kmh, 0.0, 1000.0, true);
+
+  YamlMapReader iso = r.map("iso8608");
+  std::string road_class(1, road.iso8608.road_class);
+  iso.text("class", road_class);
+  if (road_class.size() != 1 || road_class[0] < 'A' || road_class[0] > 'E') {
+    iso.fail("class", "'" + road_class + "'", "A, B, C, D or E (ISO 8608)");
+  }
+  road.iso8608.road_class = road_class[0];
+  iso.unsignedInteger("seed", road.iso8608.seed);
+  iso.number("correlation", road.iso8608.correlation, 0.0, 1.0);
+  iso.number("lead_in", road.iso8608.lead_in, 0.0, 1e6);
+  iso.number("n_min", road.iso8608.n_min, 0.0, 1e3, true);
+  iso.number("n_max", road.iso8608.n_max, road.iso8608.n_min, 1e3, true);
+  iso.integer("bands", road.iso8608.bands, 1, 100000);
+  iso.finish();
+
+  YamlMapReader pf = r.map("profile");
+  pf.text("file", road.profile_file);
+  pf.finish();
+  if (road.source == RoadSource::kProfile && road.profile_file.empty()) {
+    pf.fail("file", "(empty)", "a road profile CSV path (s,left,right in m) when road.source is profile");
+  }
 
   YamlMapReader b = r.map("speed_bump");
   readSpeedBump(b, road.speed_bump);
@@ -410,6 +437,15 @@ void readPerChannel(YamlMapReader& m, const std::string& key, const MeasurementC
 }
 
 void readTruth(YamlMapReader t, EstimatorConfig& c) {
+  if (t.has("road")) {
+    YamlMapReader road = t.map("road");
+    RoadConfig truth_road = readRoad(road);
+    if (truth_road.source == RoadSource::kNone || truth_road.source == RoadSource::kTopic) {
+      t.fail("road", "source " + toString(truth_road.source),
+             "a road to simulate (speed_bump, sine, series, course, iso8608 or profile)");
+    }
+    c.truth.road = std::make_shared<const RoadConfig>(std::move(truth_road));
+  }
   const int n = static_cast<int>(c.uncertain.size()), loads = c.loadCount();
   // truth.xi: one per `uncertain:` entry (the tolerances' truth is the truth
   // vehicle's value), or one per estimated parameter.
@@ -500,6 +536,9 @@ std::string toString(RoadSource s) {
     case RoadSource::kSeries: return "series";
     case RoadSource::kTopic: return "topic";
     case RoadSource::kCourse: return "course";
+    case RoadSource::kIso8608: return "iso8608";
+    case RoadSource::kProfile: return "profile";
+    case RoadSource::kNone: return "none";
   }
   return "?";
 }

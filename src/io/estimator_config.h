@@ -18,6 +18,7 @@
 #include "pc_ekf/io/model_type.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/road_input.h"
+#include "pc_ekf/model/road_profile.h"
 #include "pc_ekf/pc/basis_truncation.h"
 #include "pc_ekf/pc/collocation_design.h"
 #include "pc_ekf/pc/germ.h"
@@ -35,7 +36,9 @@ class ConfigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class RoadSource { kSpeedBump, kSine, kSeries, kTopic, kCourse };
+// kIso8608 and kProfile: roads by distance driven at a speed (road_profile.h);
+// kNone: no road is known (road-free estimation, docs/method.md §4.10).
+enum class RoadSource { kSpeedBump, kSine, kSeries, kTopic, kCourse, kIso8608, kProfile, kNone };
 std::string toString(RoadSource s);
 
 struct RoadConfig {
@@ -44,6 +47,9 @@ struct RoadConfig {
   SineSettings sine;
   std::string series_file;  // road CSV t,y1,y2 (source: series)
   std::vector<CourseSegment> course;  // source: course
+  Iso8608Settings iso8608;            // source: iso8608
+  std::string profile_file;           // source: profile (CSV s,left,right, m)
+  double speed_kmh = 36.0;            // iso8608 and profile: driving speed
 };
 
 // Samples at t_k = k * duration / samples, k = 1..samples (docs/method.md §1.6).
@@ -68,6 +74,10 @@ struct MeasurementConfig {
   // A list in the YAML: one value per channel (the model's order here; empty =
   // the scalar above for every channel).
   std::vector<double> noise_relative_per_channel, r_relative_per_channel;
+  // Filled by the road-free setup, not read from YAML: per model channel, the
+  // variance its reading inherits from the noise of the readings used as
+  // inputs (errors in variables; empty = none).
+  std::vector<double> input_noise_variance;
   // The model's readings: the zero convention, and readings kept as states
   // when the convention or a selected channel (IMU) needs them.
   ReadingSettings readings(const ModelDescription& model) const;
@@ -87,6 +97,9 @@ struct TruthConfig {
   SensorImperfections sensor;  // per model channel
   TimingImperfections timing;
   std::vector<TruthChange> schedule;  // times increasing, > 0
+  // The road the truth drives on (truth.road; unset: the config's road). A
+  // road-free config (road.source: none) needs it for synthetic drives.
+  std::shared_ptr<const RoadConfig> road;
 };
 
 struct CollocationConfig {

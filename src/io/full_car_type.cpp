@@ -22,6 +22,15 @@ class FullCarType : public ModelType {
                                                const ReadingSettings& readings) const override {
     return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road), readings);
   }
+  // Front wheels on the tracks, rear wheels a wheelbase behind them.
+  std::shared_ptr<const ContactRoad> drivenProfile(std::shared_ptr<const TrackProfile> profile,
+                                                   double speed,
+                                                   const ModelParameters& p) const override {
+    const double wb = FullCarParameters::from(p).wheelbase();
+    return std::make_shared<DrivenProfileRoad>(
+        std::move(profile), speed,
+        std::vector<std::pair<int, double>>{{0, 0.0}, {1, 0.0}, {0, wb}, {1, wb}});
+  }
   std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
                                                const ModelParameters& p) const override {
     FullCarBumpSettings b;

@@ -69,6 +69,26 @@ std::shared_ptr<const MechanicalModel> ModelType::build(const ModelParameters& p
   return build(parameters, std::move(road));
 }
 
+std::shared_ptr<const MechanicalModel> ModelType::buildRoadFree(
+    const ModelParameters&, std::shared_ptr<const ReadingInputs>, ZeroConvention) const {
+  throw std::invalid_argument("model " + name() + " has no road-free form (road.source: none)");
+}
+
+std::shared_ptr<const ContactRoad> ModelType::drivenProfile(
+    std::shared_ptr<const TrackProfile> profile, double speed, const ModelParameters&) const {
+  switch (contactNames().size()) {
+    case 1:
+      return std::make_shared<DrivenProfileRoad>(std::move(profile), speed,
+                                                 std::vector<std::pair<int, double>>{{0, 0.0}});
+    case 2:
+      return std::make_shared<DrivenProfileRoad>(
+          std::move(profile), speed, std::vector<std::pair<int, double>>{{0, 0.0}, {1, 0.0}});
+    default:
+      throw std::invalid_argument(name() + ": no road by distance for " +
+                                  std::to_string(contactNames().size()) + " contacts");
+  }
+}
+
 std::shared_ptr<ModelParameters> ModelType::defaults() const {
   return std::make_shared<ModelParameters>(ModelParameters::defaults(description()));
 }

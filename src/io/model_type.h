@@ -10,6 +10,8 @@
 
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/model/road_input.h"
+#include "pc_ekf/model/reading_inputs.h"
+#include "pc_ekf/model/road_profile.h"
 
 namespace pc_ekf {
 
@@ -39,6 +41,23 @@ class ModelType {
   // other counts throw std::invalid_argument (override it).
   virtual std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
                                                        const ModelParameters& parameters) const;
+  // Road-free form (road.source: none): the model driven by the readings
+  // `roadFreeInputs()` names (in that order; the optional ones when the
+  // record has them). Default: none (std::invalid_argument).
+  virtual std::shared_ptr<const MechanicalModel> buildRoadFree(
+      const ModelParameters& parameters, std::shared_ptr<const ReadingInputs> inputs,
+      ZeroConvention zero) const;
+  struct RoadFreeInputs {
+    std::vector<std::string> required, optional;
+  };
+  virtual RoadFreeInputs roadFreeInputs() const { return {}; }
+  // A road by distance (left and right tracks) driven at `speed` m/s under
+  // this model's contacts (road.source iso8608, profile). Default: one
+  // contact takes the left track, two take left and right; other counts
+  // throw std::invalid_argument (override it).
+  virtual std::shared_ptr<const ContactRoad> drivenProfile(
+      std::shared_ptr<const TrackProfile> profile, double speed,
+      const ModelParameters& parameters) const;
   // One line on the static equilibrium at the parameter vector `values`
   // (simulate_vehicle); "" when the model has nothing to say.
   virtual std::string equilibriumSummary(const ModelParameters&, const Eigen::VectorXd&) const {

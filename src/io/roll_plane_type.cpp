@@ -5,6 +5,7 @@
 
 #include "pc_ekf/io/model_type.h"
 #include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/model/roll_plane_road_free.h"
 
 namespace pc_ekf {
 namespace {
@@ -20,6 +21,15 @@ class RollPlaneType : public ModelType {
                                                std::shared_ptr<const ContactRoad> road,
                                                const ReadingSettings& readings) const override {
     return std::make_shared<RollPlaneModel>(VehicleParameters::from(p), std::move(road), readings);
+  }
+  std::shared_ptr<const MechanicalModel> buildRoadFree(const ModelParameters& p,
+                                                       std::shared_ptr<const ReadingInputs> in,
+                                                       ZeroConvention zero) const override {
+    return std::make_shared<RollPlaneRoadFreeModel>(VehicleParameters::from(p), std::move(in),
+                                                    zero);
+  }
+  RoadFreeInputs roadFreeInputs() const override {
+    return {{"u1", "u2", "v1", "v2"}, {"gyro_x"}};
   }
   std::string equilibriumSummary(const ModelParameters& laws,
                                  const Eigen::VectorXd& values) const override {

@@ -190,6 +190,10 @@ void integrate(const MechanicalModel& model, const ModelBatch& batch, double t0,
     integrateDynamic(model, batch, t0, t1, y, settings);
     return;
   }
+  if (dynamic == 0) {  // readings only (a road-free model)
+    batch.readings(t1, y);
+    return;
+  }
   // Readings kept as states: advance the dynamic rows, then read at t1.
   thread_local Eigen::ArrayXXd moving;
   moving = y.topRows(dynamic);

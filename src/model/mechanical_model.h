@@ -83,6 +83,9 @@ class MechanicalModel {
   // channel when its readings are not kept as states).
   virtual bool channelModelled(int /*channel*/) const { return true; }
   virtual ZeroConvention zero() const { return ZeroConvention::kRest; }
+  // True for a channel this model takes as an input (road-free models take
+  // the suspension readings): it is read, but not predicted.
+  virtual bool channelIsInput(int /*channel*/) const { return false; }
 
   // Full parameter vector (every physical constant of the model), in the
   // order of description().parameters().

@@ -339,7 +339,8 @@ void writeBag(const std::string& path, const BagContents& c) {
   const std::vector<double>& road_t = c.road_contacts.t;
   // Without contact names the road goes out as pc_ekf/RoadProfile (left, right).
   const std::size_t columns = contacts ? c.contacts.size() : 2;
-  if (c.road_contacts.heights.size() != columns) {
+  // No road at all (a road-free recording): no road messages.
+  if (c.road_contacts.heights.size() != columns && !(road_t.empty() && c.road_contacts.heights.empty())) {
     throw BagError(path + ": " + std::to_string(c.road_contacts.heights.size()) +
                    " road columns for " + std::to_string(columns) + " contacts");
   }

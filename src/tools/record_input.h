@@ -20,7 +20,9 @@ struct RecordInput {
 };
 
 // `bag` and `csv` are paths ("" when not given; at most one of them).
-inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& bag,
+// With road.source none the model is the road-free one built from the
+// record, and config.measurement.input_noise_variance is filled.
+inline RecordInput loadRecord(EstimatorConfig& config, const std::string& bag,
                               const std::string& csv, std::uint64_t seed) {
   RecordInput r;
   std::shared_ptr<const ContactRoad> bag_road;
@@ -35,9 +37,14 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
     bag_road = std::make_shared<SampledRoad>(record.road_contacts.t, record.road_contacts.heights);
     r.series = std::move(record.samples);
   }
-  r.model = makeModel(config, makeRoad(config, bag_road));
+  const bool road_free = config.road.source == RoadSource::kNone;
+  if (!road_free) r.model = makeModel(config, makeRoad(config, bag_road));
   if (!csv.empty()) r.series = readMeasurementCsvFile(csv, config.model_type->channelNames());
-  if (bag.empty() && csv.empty()) r.series = synthesizeFromConfig(config, *r.model, seed);
+  if (bag.empty() && csv.empty()) {
+    // Road-free: the truth drives on truth.road (the estimator knows none).
+    const auto truth = road_free ? truthOnItsRoad(config) : r.model;
+    r.series = synthesizeFromConfig(config, *truth, seed);
+  }
   // A recording may hold more channels than measurement.channels selects.
   const std::vector<int> selected = channelIndices(config);
   if (selected.size() < config.model_type->channelNames().size()) {
@@ -46,6 +53,11 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   const std::string zero = zeroConventionProblem(config, r.series);
   if (!zero.empty()) {
     throw ConfigError((bag.empty() ? csv : bag) + ": " + zero);
+  }
+  if (road_free) {
+    RoadFreeRecord split = roadFreeRecord(config, r.series);
+    r.model = split.model;
+    r.series = std::move(split.outputs);
   }
   return r;
 }

@@ -70,8 +70,11 @@ int main(int argc, char** argv) {
                       ": key 'road.source' is topic; synthesize_bag needs an analytic or series "
                       "road to simulate");
     }
-    const auto road = makeRoad(config);
-    const auto model = makeModel(config, road);
+    // Road-free (road.source none): the truth drives truth.road, and the bag
+    // holds no road, as a vehicle's recording would.
+    const bool road_free = config.road.source == RoadSource::kNone;
+    const auto road = road_free ? makeTruthRoad(config) : makeRoad(config);
+    const auto model = road_free ? truthOnItsRoad(config) : makeModel(config, road);
     const MeasurementSeries samples = synthesizeFromConfig(config, *model, seed);
     if (samples.empty()) return args.badInput(config.source + ": the config gives no samples");
 
@@ -84,7 +87,7 @@ int main(int argc, char** argv) {
       return args.badInput("--road-rate " + args["--road-rate"] + " gives " + std::to_string(count) +
                       " road messages over " + std::to_string(t_last) + " s; too many");
     }
-    bag.road_contacts = sampleContactRoad(*road, t_last, road_rate);
+    if (!road_free) bag.road_contacts = sampleContactRoad(*road, t_last, road_rate);
     if (!config.model_type->twoContacts()) {
       bag.contacts = config.model_type->contactNames();
       bag.joints = suspensionJoints(*config.model_type, config.node.joint_names);

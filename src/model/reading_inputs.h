@@ -1,0 +1,41 @@
+// Readings used as inputs (road-free estimation, docs/method.md §4.10): a
+// record's channels by time, linearly interpolated (a missing value is
+// interpolated from its neighbours), held before the first and after the
+// last sample; the sample times themselves, and running integrals.
+#pragma once
+
+#include <Eigen/Dense>
+#include <string>
+#include <vector>
+
+namespace pc_ekf {
+
+class ReadingInputs {
+ public:
+  // columns[c][k]: input c at times[k] (NaN = not read at that sample).
+  // Throws std::invalid_argument for no samples, times not increasing or an
+  // input never read.
+  ReadingInputs(std::vector<std::string> names, std::vector<double> times,
+                std::vector<std::vector<double>> columns);
+  int count() const { return static_cast<int>(names_.size()); }
+  const std::vector<std::string>& names() const { return names_; }
+  const std::vector<double>& times() const { return t_; }
+  // Every input at t.
+  void at(double t, double* out) const;
+  // The latest sample time before t (0 when none: the vehicle at rest).
+  double previousTime(double t) const;
+  // The integral of input c from 0 to t (trapezoids; 0 before the first
+  // sample's value is assumed from t = 0 on).
+  double integral(int c, double t) const;
+  // Mean and RMS of input c over the samples.
+  double mean(int c) const;
+  double rms(int c) const;
+
+ private:
+  std::vector<std::string> names_;
+  std::vector<double> t_;
+  std::vector<std::vector<double>> v_;    // [input][sample], gaps filled
+  std::vector<std::vector<double>> cum_;  // [input][sample]: integral up to t_k
+};
+
+}  // namespace pc_ekf

@@ -1,0 +1,264 @@
+// Road-free roll plane (roll_plane_road_free.h, docs/method.md §4.10).
+#include "pc_ekf/model/roll_plane_road_free.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "pc_ekf/model/smooth_functions.h"
+
+namespace pc_ekf {
+
+// Per point: what the outputs need (one entry per collocation point).
+struct RoadFreeConstants {
+  struct Point {
+    double k[2], k3[2], damping[2], delta_ref[2];
+    double inv_total, inv_inertia, cg, rear_arm, imu_arm;
+    double roll_static, gravity, rest_y, rest_z;
+  };
+  std::vector<Point> points;
+  DamperLaw law = DamperLaw::kTanh;
+  double tanh_rate = 0.0;
+};
+
+namespace {
+
+constexpr int kU1 = 0, kV1 = 2, kGyro = 4;
+
+// phi'' and g + a at the IMU for inputs `in` (u1 u2 v1 v2 [gyro]) and the
+// roll since rest `roll`.
+double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Point& p,
+                        const double* in, double roll, double* specific) {
+  double f[2];
+  for (int i = 0; i < 2; ++i) {
+    const double x = p.delta_ref[i] - in[kU1 + i];  // spring compression
+    const double v = in[kV1 + i];
+    const double damper = c.law == DamperLaw::kTanh
+                              ? damperForce<DamperLaw::kTanh>(p.damping[i], c.tanh_rate, v)
+                              : damperForce<DamperLaw::kLinear>(p.damping[i], c.tanh_rate, v);
+    f[i] = p.k[i] * x + p.k3[i] * x * x * x - damper;
+  }
+  const double theta_dd =
+      std::cos(p.roll_static + roll) * (p.rear_arm * f[1] - p.cg * f[0]) * p.inv_inertia;
+  *specific = (f[0] + f[1]) * p.inv_total + p.imu_arm * theta_dd;
+  return -theta_dd;
+}
+
+// The three outputs (accel_y, accel_z, gyro_x) of one point at t, from the
+// inputs now and at the previous sample (t - dt), the roll since rest and the
+// gyro read at the previous sample.
+void outputs(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, const double* now,
+             const double* before, bool before_at_rest, double dt, double roll,
+             double roll_before, double gyro_before, double* out) {
+  double specific = 0.0, specific_before = 0.0;
+  const double phi_dd = rollAcceleration(c, p, now, roll, &specific);
+  const double phi_dd_before =
+      before_at_rest ? 0.0 : rollAcceleration(c, p, before, roll_before, &specific_before);
+  const double phi = p.roll_static + roll;
+  out[0] = specific * std::sin(phi) - p.rest_y;
+  out[1] = specific * std::cos(phi) - p.rest_z;
+  out[2] = gyro_before + 0.5 * (phi_dd + phi_dd_before) * dt;
+}
+
+class RoadFreeBatch : public ModelBatch {
+ public:
+  RoadFreeBatch(std::unique_ptr<RoadFreeConstants> c, std::shared_ptr<const ReadingInputs> in)
+      : c_(std::move(c)), in_(std::move(in)) {}
+  int pointCount() const override { return static_cast<int>(c_->points.size()); }
+  void derivatives(double, const Eigen::ArrayXXd& y, Eigen::ArrayXXd& dydt) const override {
+    dydt.resize(y.rows(), y.cols());  // no dynamic state
+  }
+  Eigen::ArrayXXd initialState() const override {
+    Eigen::ArrayXXd y(3, pointCount());
+    for (Eigen::Index q = 0; q < y.cols(); ++q) {
+      const RoadFreeConstants::Point& p = c_->points[static_cast<std::size_t>(q)];
+      y(0, q) = p.gravity * std::sin(p.roll_static) - p.rest_y;  // at rest
+      y(1, q) = p.gravity * std::cos(p.roll_static) - p.rest_z;
+      y(2, q) = 0.0;
+    }
+    return y;
+  }
+  void readings(double t, Eigen::ArrayXXd& y) const override {
+    const int n = in_->count();
+    const bool gyro = n > kGyro;
+    double now[5] = {0, 0, 0, 0, 0}, before[5] = {0, 0, 0, 0, 0};
+    in_->at(t, now);
+    const double t_before = in_->previousTime(t);
+    const bool at_rest = !(t_before > 0.0);
+    if (!at_rest) in_->at(t_before, before);
+    const double roll = gyro ? in_->integral(kGyro, t) : 0.0;
+    const double roll_before = gyro && !at_rest ? in_->integral(kGyro, t_before) : 0.0;
+    const double gyro_before = gyro && !at_rest ? before[kGyro] : 0.0;
+    double out[3];
+    for (Eigen::Index q = 0; q < y.cols(); ++q) {
+      outputs(*c_, c_->points[static_cast<std::size_t>(q)], now, before, at_rest, t - t_before,
+              roll, roll_before, gyro_before, out);
+      for (int r = 0; r < 3; ++r) y(r, q) = out[r];
+    }
+  }
+
+ private:
+  std::unique_ptr<RoadFreeConstants> c_;
+  std::shared_ptr<const ReadingInputs> in_;
+};
+
+}  // namespace
+
+RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
+                                               std::shared_ptr<const ReadingInputs> inputs,
+                                               ZeroConvention zero)
+    : nominal_(nominal),
+      with_road_(nominal, std::make_shared<SineRoad>(SineSettings{0.0, 1.0, -1.0})),
+      inputs_(std::move(inputs)),
+      zero_(zero),
+      nominal_vector_(nominal.toVector()),
+      state_names_{"reading_accel_y", "reading_accel_z", "reading_gyro_x"},
+      h_(Eigen::MatrixXd::Zero(7, 3)) {
+  if (!inputs_) throw std::invalid_argument("road-free roll plane: no inputs");
+  const std::vector<std::string> expected{"u1", "u2", "v1", "v2", "gyro_x"};
+  const auto& names = inputs_->names();
+  if (names.size() < 4 || names.size() > 5 ||
+      !std::equal(names.begin(), names.end(), expected.begin())) {
+    throw std::invalid_argument("road-free roll plane: inputs must be u1 u2 v1 v2 [gyro_x]");
+  }
+  h_.bottomRows(3).setIdentity();
+}
+
+bool RollPlaneRoadFreeModel::channelModelled(int channel) const {
+  if (channel == 5) return true;  // accel_z needs the suspension readings only
+  return (channel == 4 || channel == 6) && inputs_->count() > kGyro;  // the gyro's integral
+}
+
+std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
+    const Eigen::MatrixXd& params) const {
+  auto c = std::make_unique<RoadFreeConstants>();
+  c->law = nominal_.damper;
+  c->tanh_rate = nominal_.damper_tanh_rate;
+  const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
+  std::vector<VehicleParameters> points, empty;
+  for (Eigen::Index q = 0; q < params.cols(); ++q) {
+    const std::string why = invalidReason(params.col(q));
+    if (!why.empty()) {
+      throw std::invalid_argument("road-free roll plane: column " + std::to_string(q) + ": " + why);
+    }
+    points.push_back(VehicleParameters::fromVector(params.col(q), nominal_));
+    empty.push_back(points.back());
+    empty.back().added_mass = 0.0;
+  }
+  const std::vector<StaticEquilibrium> loaded = solveStaticEquilibria(points);
+  const bool tare = zero_ == ZeroConvention::kTare;
+  std::vector<StaticEquilibrium> unloaded;
+  if (tare) unloaded = solveStaticEquilibria(empty);
+  for (std::size_t q = 0; q < points.size(); ++q) {
+    const VehicleParameters& p = points[q];
+    const StaticEquilibrium& e = loaded[q];
+    RoadFreeConstants::Point a{};
+    const double total = p.bar_mass + p.added_mass, cg = e.combined_cg, L = p.bar_length;
+    for (int i = 0; i < 2; ++i) {
+      a.k[i] = p.spring_linear[i];
+      a.k3[i] = p.spring_cubic[i];
+      a.damping[i] = p.damping[i] * scale;
+      a.delta_ref[i] = tare ? unloaded[q].spring_compression[i] : e.spring_compression[i];
+    }
+    const double inertia = p.bar_inertia + p.bar_mass * (0.5 * L - cg) * (0.5 * L - cg) +
+                           p.added_mass * (cg - p.added_mass_position) * (cg - p.added_mass_position);
+    a.inv_total = 1.0 / total;
+    a.inv_inertia = 1.0 / inertia;
+    a.cg = cg;
+    a.rear_arm = L - cg;
+    a.imu_arm = p.imu_position - cg;
+    a.roll_static = -e.roll_angle;
+    a.gravity = p.gravity;
+    a.rest_y = tare ? 0.0 : p.gravity * std::sin(a.roll_static);
+    a.rest_z = tare ? 0.0 : p.gravity * std::cos(a.roll_static);
+    c->points.push_back(a);
+  }
+  return c;
+}
+
+std::unique_ptr<ModelBatch> RollPlaneRoadFreeModel::prepare(const Eigen::MatrixXd& params) const {
+  if (params.rows() != nominal_vector_.size()) {
+    throw std::invalid_argument("road-free roll plane: expected " +
+                                std::to_string(nominal_vector_.size()) + " parameter rows");
+  }
+  return std::make_unique<RoadFreeBatch>(constants(params), inputs_);
+}
+
+Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
+                                                           const Eigen::VectorXd& relative,
+                                                           double mean_accel_z) const {
+  const int n = inputs_->count();
+  if (absolute.size() != n || relative.size() != n) {
+    throw std::invalid_argument("inputNoiseVariance: one std per input");
+  }
+  const std::vector<double>& t = inputs_->times();
+  Eigen::VectorXd vehicle = nominal_vector_;
+  // With tare the record weighs the load: the springs' mean force over the
+  // mean specific force is m + M (the derivatives scale with 1 / (m + M)).
+  if (zero_ == ZeroConvention::kTare && mean_accel_z > 0.0) {
+    const std::unique_ptr<RoadFreeConstants> c0 = constants(Eigen::MatrixXd(vehicle));
+    const RoadFreeConstants::Point& p0 = c0->points.front();
+    double force = 0.0;
+    for (double tk : t) {
+      double in[5] = {0, 0, 0, 0, 0};
+      inputs_->at(tk, in);
+      for (int i = 0; i < 2; ++i) {
+        const double x = p0.delta_ref[i] - in[kU1 + i];
+        force += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+    }
+    force /= static_cast<double>(t.size());
+    const int m = rollPlaneDescription().parameters().at("bar_mass");
+    const int added = rollPlaneDescription().parameters().at("added_mass");
+    const double load = force / mean_accel_z - vehicle[m];
+    if (std::isfinite(load)) {
+      vehicle[added] = std::clamp(load, 0.0, 4.0 * std::max(vehicle[added], vehicle[m]));
+    }
+  }
+  const std::unique_ptr<RoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
+  const RoadFreeConstants::Point& p = c->points.front();
+  const double duration = t.back();
+  // The inputs now and at the previous sample, and the gyro's integral (its
+  // std at the record's end), perturbed one at a time by their noise at that
+  // sample (central differences), the noise of "now" and "before"
+  // independent. The mean over the samples of each output's variance.
+  Eigen::VectorXd variance = Eigen::VectorXd::Zero(7);
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double t_before = k == 0 ? 0.0 : t[k - 1], dt = t[k] - t_before;
+    const double roll_std = n > kGyro ? absolute[kGyro] * std::sqrt(dt * duration) : 0.0;
+    double now0[5] = {0, 0, 0, 0, 0}, before0[5] = {0, 0, 0, 0, 0};
+    inputs_->at(t[k], now0);
+    if (k > 0) inputs_->at(t_before, before0);
+    for (int which = 0; which < 2 * n + 1; ++which) {
+      const bool is_roll = which == 2 * n;
+      const int i = which % n;
+      if (!is_roll && which >= n && k == 0) continue;  // before the first sample: at rest
+      const double reading = which < n ? now0[i] : before0[i];
+      const double step =
+          is_roll ? roll_std : std::hypot(absolute[i], relative[i] * reading);
+      if (!(step > 0.0)) continue;
+      double plus[3], minus[3];
+      for (const int sign : {1, -1}) {
+        double now[5], before[5];
+        std::copy(now0, now0 + 5, now);
+        std::copy(before0, before0 + 5, before);
+        double roll = 0.0;
+        if (is_roll) {
+          roll = sign * step;
+        } else if (which < n) {
+          now[i] += sign * step;
+        } else {
+          before[i] += sign * step;
+        }
+        outputs(*c, p, now, before, k == 0, dt, roll, 0.0, before[kGyro], sign > 0 ? plus : minus);
+      }
+      for (int r = 0; r < 3; ++r) {
+        const double d = 0.5 * (plus[r] - minus[r]);  // J * std
+        variance[4 + r] += d * d;
+      }
+    }
+  }
+  return variance / static_cast<double>(t.size());
+}
+
+}  // namespace pc_ekf
