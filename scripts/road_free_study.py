@@ -45,7 +45,12 @@ def main():
     ap.add_argument("bin")
     ap.add_argument("--seeds", type=int, default=1)
     ap.add_argument("--methods", default="one_step,es_mda")
+    ap.add_argument("--model-errors", action="store_true",
+                    help="instead: a spring 15 %% beyond its tolerance (+25 %%) and the IMU "
+                         "5 cm off (tolerance 2 cm); every run should be flagged")
     a = ap.parse_args()
+    if a.model_errors:
+        return model_errors(a)
     exe = os.path.join(a.bin, "estimate_offline")
     print("| road | zero | method | runs | covered & healthy | silent | median std M (kg) | median std d_CG (mm) |")
     print("|---|---|---|---|---|---|---|---|")
@@ -84,6 +89,32 @@ def main():
                         name, zero, method, runs, covered, silent, statistics.median(sm),
                         statistics.median(sd)), flush=True)
     print("\nall: %d runs, %d covered and healthy, %d silent" % tuple(total))
+
+
+def model_errors(a):
+    exe = os.path.join(a.bin, "estimate_offline")
+    errors = {"spring_linear_left +25 %": "spring_linear_left: 24196.5",
+              "IMU 5 cm right of where told": "imu_position: 0.812"}
+    print("| model error | road | zero | method | flagged |")
+    print("|---|---|---|---|---|")
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, vehicle in errors.items():
+            for name, (road, duration) in ROADS.items():
+                for zero in ("tare", "rest"):
+                    for method in a.methods.split(","):
+                        flagged = 0
+                        for mass, position in LOADS:
+                            text = config_text(road, duration, zero, False, mass, position, 1)
+                            text = text.replace("  xi: [", "  vehicle: {%s}\n  xi: [" % vehicle, 1)
+                            cfg = os.path.join(tmp, "c.yaml")
+                            open(cfg, "w").write(text)
+                            out = subprocess.run([exe, "--config", cfg, "--method", method],
+                                                 capture_output=True, text=True)
+                            if out.returncode != 0:
+                                sys.exit(out.stderr)
+                            flagged += not json.loads(out.stdout)["healthy"]
+                        print("| %s | %s | %s | %s | %d/%d |" % (label, name, zero, method, flagged,
+                                                              len(LOADS)), flush=True)
 
 
 if __name__ == "__main__":

@@ -6,7 +6,6 @@
 #include <sstream>
 
 #include "pc_ekf/io/measurement_csv.h"
-#include "pc_ekf/model/roll_plane_road_free.h"
 
 namespace pc_ekf {
 
@@ -100,12 +99,9 @@ RoadFreeRecord roadFreeRecord(EstimatorConfig& c, const MeasurementSeries& recor
       ++count;
     }
   }
-  const auto* road_free = dynamic_cast<const RollPlaneRoadFreeModel*>(r.model.get());
-  if (road_free) {
-    const Eigen::VectorXd v =
-        road_free->inputNoiseVariance(absolute, relative, count > 0 ? accel_z / count : 0.0);
-    c.measurement.input_noise_variance.assign(v.data(), v.data() + v.size());
-  }
+  const double mean_accel_z = count > 0 ? accel_z / count : 0.0;
+  const Eigen::VectorXd v = r.model->inputNoiseVariance(absolute, relative, mean_accel_z);
+  c.measurement.input_noise_variance.assign(v.data(), v.data() + v.size());
   return r;
 }
 

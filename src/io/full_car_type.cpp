@@ -5,6 +5,7 @@
 
 #include "pc_ekf/io/model_type.h"
 #include "pc_ekf/model/full_car_model.h"
+#include "pc_ekf/model/full_car_road_free.h"
 #include "pc_ekf/model/full_car_road.h"
 
 namespace pc_ekf {
@@ -21,6 +22,14 @@ class FullCarType : public ModelType {
                                                std::shared_ptr<const ContactRoad> road,
                                                const ReadingSettings& readings) const override {
     return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road), readings);
+  }
+  std::shared_ptr<const MechanicalModel> buildRoadFree(const ModelParameters& p,
+                                                       std::shared_ptr<const ReadingInputs> in,
+                                                       ZeroConvention zero) const override {
+    return std::make_shared<FullCarRoadFreeModel>(FullCarParameters::from(p), std::move(in), zero);
+  }
+  RoadFreeInputs roadFreeInputs() const override {
+    return {{"u_fl", "u_fr", "u_rl", "u_rr", "v_fl", "v_fr", "v_rl", "v_rr"}, {"gyro_x", "gyro_y"}};
   }
   // Front wheels on the tracks, rear wheels a wheelbase behind them.
   std::shared_ptr<const ContactRoad> drivenProfile(std::shared_ptr<const TrackProfile> profile,

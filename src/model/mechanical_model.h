@@ -86,6 +86,15 @@ class MechanicalModel {
   // True for a channel this model takes as an input (road-free models take
   // the suspension readings): it is read, but not predicted.
   virtual bool channelIsInput(int /*channel*/) const { return false; }
+  // Road-free models: per model channel, the variance a predicted reading
+  // inherits from the noise of the input readings (errors in variables); an
+  // input's noise std is hypot(absolute, relative * reading), one entry per
+  // input; mean_accel_z the record's (0: unknown). Empty for other models.
+  virtual Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& /*absolute*/,
+                                             const Eigen::VectorXd& /*relative*/,
+                                             double /*mean_accel_z*/) const {
+    return {};
+  }
 
   // Full parameter vector (every physical constant of the model), in the
   // order of description().parameters().

@@ -56,7 +56,7 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
   // force over mean_accel_z, less the body mass.
   Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& absolute,
                                      const Eigen::VectorXd& relative,
-                                     double mean_accel_z) const;
+                                     double mean_accel_z) const override;
   const ReadingInputs& inputs() const { return *inputs_; }
 
  private:

@@ -182,7 +182,10 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
       "health: {innovation_gate: 1e-6, predictive_check: false}\n",
       "t.yaml");
   EXPECT_EQ(c.measurement.r_rule, NoiseRule::kSensor);
-  EXPECT_EQ(c.measurement.sensor_std.size(), 4u);
+  // One per model channel: the four given for u1 u2 v1 v2, the IMU channels
+  // (not selected) at the largest.
+  EXPECT_EQ(c.measurement.sensor_std,
+            (std::vector<double>{1e-3, 1e-3, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2}));
   EXPECT_EQ(c.safeguards.support, SupportRule::kIgnore);
   EXPECT_EQ(c.safeguards.drift, (std::vector<double>{2.0, 0.0}));
   EXPECT_EQ(c.safeguards.reopen.mode, ReopenMode::kPrior);

@@ -75,12 +75,13 @@ TEST(StaticEquilibrium, NonFiniteInputThrows) {
 
 TEST(VehicleParametersVector, OrderAndRoundTrip) {
   const RollPlaneModel model = makeModel();
-  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 16u);
+  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 17u);
   EXPECT_EQ(model.parameterIndex("bar_mass"), 0);
   EXPECT_EQ(model.parameterIndex("spring_cubic_right"), 8);
   EXPECT_EQ(model.parameterIndex("gravity"), 13);
   EXPECT_EQ(model.parameterIndex("added_mass"), 14);
   EXPECT_EQ(model.parameterIndex("added_mass_position"), 15);
+  EXPECT_EQ(model.parameterIndex("imu_position"), 16);
   EXPECT_EQ(model.parameterIndex("no_such_parameter"), -1);
 
   VehicleParameters p = at(0.3, 0.7);

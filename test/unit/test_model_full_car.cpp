@@ -64,16 +64,19 @@ Eigen::Matrix<double, 7, 1> residualsOf(const FullCarParameters& p, const FullCa
 TEST(FullCarParameters, VectorRoundTripAndNames) {
   const FullCarParameters p = truth();
   const Eigen::VectorXd v = p.toVector();
-  ASSERT_EQ(v.size(), 19);
-  ASSERT_EQ(fullCarParameterNames().size(), 19u);
+  ASSERT_EQ(v.size(), 21);
+  ASSERT_EQ(fullCarParameterNames().size(), 21u);
   EXPECT_EQ(fullCarParameterNames().front(), "body_mass");
-  EXPECT_EQ(fullCarParameterNames().back(), "added_mass_y");
+  EXPECT_EQ(fullCarParameterNames().back(), "imu_y");
   EXPECT_EQ(FullCarParameters::fromVector(v, p).toVector(), v);
   const FullCarModel model(p, bumpRoad());
   EXPECT_EQ(model.parameterIndex("tyre_stiffness"), 14);
   EXPECT_DOUBLE_EQ(v[model.parameterIndex("added_mass_x")], 1.3 * (1.0 - 0.4 * 0.3875));
   EXPECT_EQ(model.stateSize(), 14);
-  EXPECT_EQ(model.channelNames().size(), 8u);
+  EXPECT_EQ(model.channelNames().size(), 12u);  // 8 suspension, 4 IMU
+  EXPECT_EQ(model.observationMatrix().rows(), 12);
+  EXPECT_TRUE(model.channelModelled(7));
+  EXPECT_FALSE(model.channelModelled(8));  // IMU channels need readings as states
   // H: u_fr = z + a theta - (w/2) phi - zu_fr; v_rl = zdot - b thetadot + (w/2) phidot - zudot_rl.
   const Eigen::MatrixXd& h = model.observationMatrix();
   EXPECT_EQ(h(1, 0), 1.0);

@@ -1,0 +1,198 @@
+// Roads by distance (ISO 8608, measured profiles) and the road-free roll
+// plane (docs/method.md §1.5, §4.10): the rough road's variance against the
+// integral of its PSD, and the road-free outputs against the full model's
+// readings on the same drive.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+
+#include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/model/roll_plane_road_free.h"
+#include "pc_ekf/model/road_profile.h"
+
+namespace pc_ekf {
+namespace {
+
+TEST(Iso8608Road, VarianceIsTheIntegralOfThePsd) {
+  for (char road_class : {'A', 'C'}) {
+    Iso8608Settings s;
+    s.road_class = road_class;
+    s.lead_in = 0.0;
+    const Iso8608Profile road(s);
+    // Gd(n) = Gd(n0) (n0 / n)^2 integrated over [n_min, n_max].
+    const double g0 = iso8608Roughness(road_class), n0 = 0.1;
+    const double expected = g0 * n0 * n0 * (1.0 / s.n_min - 1.0 / s.n_max);
+    double sum = 0.0, sum_sq = 0.0, cross = 0.0;
+    long count = 0;
+    for (double x = 0.01; x < 20000.0; x += 0.37) {
+      const double l = road.height(0, x), r = road.height(1, x);
+      sum += l;
+      sum_sq += l * l;
+      cross += l * r;
+      ++count;
+    }
+    const double variance = sum_sq / count - (sum / count) * (sum / count);
+    EXPECT_NEAR(variance / expected, 1.0, 0.05) << road_class;
+    EXPECT_LT(std::abs(cross / count) / variance, 0.1) << "independent tracks";
+  }
+  EXPECT_DOUBLE_EQ(iso8608Roughness('B'), 64e-6);
+  EXPECT_THROW(iso8608Roughness('F'), std::invalid_argument);
+}
+
+TEST(Iso8608Road, CorrelatedTracksSeedsAndLeadIn) {
+  Iso8608Settings s;
+  s.correlation = 1.0;
+  const Iso8608Profile same(s);
+  for (double x : {3.0, 17.5, 120.0}) EXPECT_NEAR(same.height(1, x), same.height(0, x), 1e-15);
+  Iso8608Settings other = s;
+  other.seed = 2;
+  EXPECT_NE(Iso8608Profile(other).height(0, 10.0), same.height(0, 10.0));
+  EXPECT_EQ(same.height(0, 0.0), 0.0);  // at rest on level ground at s = 0
+  EXPECT_LT(std::abs(same.height(0, 0.01)), 1e-5);
+}
+
+TEST(MeasuredProfile, InterpolatesByDistanceFromItsFirstSample) {
+  const MeasuredProfile p({10.0, 10.5, 11.0}, {0.0, 0.01, -0.01}, {0.0, 0.0, 0.02});
+  EXPECT_DOUBLE_EQ(p.length(), 1.0);
+  EXPECT_NEAR(p.height(0, 0.25), 0.005, 1e-15);
+  EXPECT_NEAR(p.height(1, 0.75), 0.01, 1e-15);
+  EXPECT_EQ(p.height(0, 5.0), -0.01);  // held after the end
+  EXPECT_EQ(p.kinks(0.0, 1.0), (std::vector<double>{0.5}));
+  EXPECT_THROW(MeasuredProfile({0.0, 0.0}, {0.0, 0.0}, {0.0, 0.0}), std::invalid_argument);
+}
+
+TEST(DrivenProfileRoad, ContactsLagByDistanceAtTheSpeed) {
+  auto p = std::make_shared<MeasuredProfile>(std::vector<double>{0.0, 10.0},
+                                             std::vector<double>{0.0, 1.0},
+                                             std::vector<double>{0.0, 2.0});
+  const DrivenProfileRoad road(p, 10.0, {{0, 0.0}, {1, 0.0}, {0, 2.6}});
+  Eigen::VectorXd h(3);
+  road.heights(0.5, h);  // 5 m travelled
+  EXPECT_NEAR(h[0], 0.5, 1e-15);
+  EXPECT_NEAR(h[1], 1.0, 1e-15);
+  EXPECT_NEAR(h[2], 0.24, 1e-15);  // 2.4 m on the rear
+}
+
+// The full model drives a rough road; its clean suspension readings and gyro
+// are the road-free model's inputs. At the true parameters the road-free
+// accel_z equals the full model's (to the integrator's and the cos(phi)
+// approximation's accuracy), in both conventions.
+TEST(RollPlaneRoadFree, ReproducesTheFullModelsImuFromItsSuspensionReadings) {
+  for (const ZeroConvention zero : {ZeroConvention::kTare, ZeroConvention::kRest}) {
+    VehicleParameters p;
+    p.added_mass = 280.0;
+    p.added_mass_position = 0.9;
+    Iso8608Settings s;
+    s.road_class = 'C';
+    auto road = std::make_shared<DrivenProfileRoad>(std::make_shared<Iso8608Profile>(s), 10.0,
+                                                    std::vector<std::pair<int, double>>{{0, 0.0}, {1, 0.0}});
+    const RollPlaneModel full(p, road, {zero, true});
+    Eigen::MatrixXd params = p.toVector();
+    const auto batch = full.prepare(params);
+    Eigen::ArrayXXd y = batch->initialState();
+    IntegratorSettings is;
+    is.max_step = 2.5e-4;
+    std::vector<double> times;
+    std::vector<std::vector<double>> in(5);
+    std::vector<double> accel_z, accel_y, gyro;
+    double t = 0.0;
+    for (int k = 1; k <= 400; ++k) {
+      const double tk = k * 0.005;
+      integrate(full, *batch, t, tk, y, is);
+      t = tk;
+      times.push_back(tk);
+      for (int c = 0; c < 4; ++c) in[c].push_back(y(8 + c, 0));
+      in[4].push_back(y(14, 0));
+      accel_y.push_back(y(12, 0));
+      accel_z.push_back(y(13, 0));
+      gyro.push_back(y(14, 0));
+    }
+    auto inputs = std::make_shared<ReadingInputs>(
+        std::vector<std::string>{"u1", "u2", "v1", "v2", "gyro_x"}, times, in);
+    const RollPlaneRoadFreeModel free(p, inputs, zero);
+    EXPECT_EQ(free.stateSize(), 3);
+    EXPECT_TRUE(free.channelIsInput(0));
+    EXPECT_TRUE(free.channelModelled(5));
+    const auto fb = free.prepare(params);
+    double worst_z = 0.0, worst_y = 0.0, worst_gyro = 0.0, motion = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      Eigen::ArrayXXd r = fb->initialState();
+      integrate(free, *fb, 0.0, times[k], r, is);
+      worst_z = std::max(worst_z, std::abs(r(1, 0) - accel_z[k]));
+      worst_y = std::max(worst_y, std::abs(r(0, 0) - accel_y[k]));
+      worst_gyro = std::max(worst_gyro, std::abs(r(2, 0) - gyro[k]));
+      motion = std::max(motion, std::abs(accel_z[k] - (zero == ZeroConvention::kTare ? 9.81 : 0.0)));
+    }
+    EXPECT_GT(motion, 0.5);             // the road shakes the body
+    EXPECT_LT(worst_z, 2e-3 * motion);  // cos(phi) of the dynamic roll only
+    EXPECT_LT(worst_y, 5e-3);           // the gyro's integral by trapezoids
+    EXPECT_LT(worst_gyro, 2e-3);        // the increment's trapezoid over 5 ms
+    // A lighter load in the model: accel_z larger by about g dM / (m + M).
+    VehicleParameters lighter = p;
+    lighter.added_mass = 270.0;
+    Eigen::MatrixXd lp = lighter.toVector();
+    const auto lb = free.prepare(lp);
+    Eigen::ArrayXXd a = lb->initialState(), b = fb->initialState();
+    integrate(free, *lb, 0.0, times[200], a, is);
+    integrate(free, *fb, 0.0, times[200], b, is);
+    if (zero == ZeroConvention::kTare) {
+      EXPECT_NEAR(a(1, 0) - b(1, 0), b(1, 0) * 10.0 / (580.0 + 270.0), 0.01);
+    }
+  }
+}
+
+// Errors in variables: the variance an output inherits from noisy inputs,
+// against Monte Carlo draws of that noise.
+TEST(RollPlaneRoadFree, InputNoiseVarianceMatchesMonteCarlo) {
+  VehicleParameters p;
+  std::vector<double> times;
+  std::vector<std::vector<double>> in(4);
+  for (int k = 1; k <= 50; ++k) {
+    times.push_back(0.01 * k);
+    in[0].push_back(-0.03 + 0.01 * std::sin(0.3 * k));
+    in[1].push_back(-0.035 + 0.01 * std::cos(0.2 * k));
+    in[2].push_back(0.05 * std::sin(0.5 * k));
+    in[3].push_back(0.04 * std::cos(0.4 * k));
+  }
+  const Eigen::Vector4d absolute(5e-4, 5e-4, 5e-3, 5e-3), relative(0.01, 0.01, 0.0, 0.0);
+  const auto clean = std::make_shared<ReadingInputs>(
+      std::vector<std::string>{"u1", "u2", "v1", "v2"}, times, in);
+  const RollPlaneRoadFreeModel model(p, clean, ZeroConvention::kTare);
+  const double predicted = model.inputNoiseVariance(absolute, relative, 0.0)[5];
+  Eigen::MatrixXd params = p.toVector();
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal;
+  double sum_sq = 0.0;
+  long count = 0;
+  const auto exact = model.prepare(params);
+  for (int draw = 0; draw < 400; ++draw) {
+    std::vector<std::vector<double>> noisy = in;
+    for (int c = 0; c < 4; ++c) {
+      for (double& v : noisy[static_cast<std::size_t>(c)]) v += std::hypot(absolute[c], relative[c] * v) * normal(rng);
+    }
+    const RollPlaneRoadFreeModel m(p, std::make_shared<ReadingInputs>(clean->names(), times, noisy),
+                                   ZeroConvention::kTare);
+    const auto b = m.prepare(params);
+    for (std::size_t k = 0; k < times.size(); k += 7) {
+      Eigen::ArrayXXd r = b->initialState(), e = exact->initialState();
+      IntegratorSettings is;
+      integrate(m, *b, 0.0, times[k], r, is);
+      integrate(model, *exact, 0.0, times[k], e, is);
+      sum_sq += (r(1, 0) - e(1, 0)) * (r(1, 0) - e(1, 0));
+      ++count;
+    }
+  }
+  EXPECT_NEAR(sum_sq / count / predicted, 1.0, 0.1);
+  EXPECT_GT(predicted, 1e-4);  // comparable to a MEMS accelerometer's own noise
+}
+
+}  // namespace
+}  // namespace pc_ekf
+
+int main(int argc, char** argv) {
+  testing::InitGoogleTest(&argc, argv);
+  return RUN_ALL_TESTS();
+}
