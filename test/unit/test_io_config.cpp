@@ -153,10 +153,6 @@ TEST(Config, ScrambledHaltonKeys) {
   EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").collocation.seed, 1u);
   const std::string e = errorOf(std::string("collocation: {sequence: sobol}\n") + kMinimal);
   EXPECT_NE(e.find("scrambled_halton"), std::string::npos) << e;
-  // The shipped live config at n = 15.
-  EXPECT_EQ(loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml")
-                .collocation.sequence,
-            PointSequence::kScrambledHalton);
 }
 
 TEST(Config, SparseGridKeys) {
