@@ -36,6 +36,8 @@ PriorSensitivity priorSensitivity(const PcPropagator& propagator, const std::vec
   double t = 0.0;
   Eigen::MatrixXd first, total;
   Eigen::VectorXd variance;
+  Eigen::VectorXd missed = Eigen::VectorXd::Zero(h.rows());
+  bool loo_everywhere = !times.empty();
   for (double tk : times) {
     const ForecastReport report = propagator.forecast(x, t, tk);
     if (!report.ok) {
@@ -47,6 +49,19 @@ PriorSensitivity priorSensitivity(const PcPropagator& propagator, const std::vec
     s.first += first;
     s.total += total;
     s.variance += variance;
+    if (report.loo_error.size() == static_cast<Eigen::Index>(model.channelNames().size())) {
+      for (Eigen::Index c = 0; c < h.rows(); ++c) {
+        missed[c] += report.loo_error[channels[c]] * report.loo_error[channels[c]] * variance[c];
+      }
+    } else {
+      loo_everywhere = false;
+    }
+  }
+  if (loo_everywhere) {
+    s.unexplained = Eigen::VectorXd::Zero(h.rows());
+    for (Eigen::Index c = 0; c < h.rows(); ++c) {
+      if (s.variance[c] > 0) s.unexplained[c] = std::min(1.0, missed[c] / s.variance[c]);
+    }
   }
   for (Eigen::Index c = 0; c < h.rows(); ++c) {
     if (s.variance[c] > 0) {
@@ -75,6 +90,15 @@ std::string sensitivityTable(const PriorSensitivity& s) {
       out += buf;
     }
     out += "\n";
+  }
+  if (s.unexplained.size() > 0) {
+    std::snprintf(buf, sizeof(buf), "  %-24s %8s", "missed by the expansion", "");
+    out += buf;
+    for (Eigen::Index c = 0; c < s.unexplained.size(); ++c) {
+      std::snprintf(buf, sizeof(buf), " %8.2e", s.unexplained[c]);
+      out += buf;
+    }
+    out += "   (leave-one-out share of each channel's variance)\n";
   }
   return out;
 }

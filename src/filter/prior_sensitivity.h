@@ -18,6 +18,13 @@ struct PriorSensitivity {
   std::vector<std::string> channels;    // the observed channels
   Eigen::MatrixXd total, first;         // parameters x channels, in [0, 1]
   Eigen::VectorXd variance;             // per channel: prior forecast variance summed over samples
+  // Per channel: the share of the forecast's variance that the truncated
+  // expansion misses, estimated by the projection's leave-one-out error e_k
+  // at each sample (sum_k e_k^2 var_k / sum_k var_k; e_k as
+  // CollocationDesign::leaveOneOutError). The indices above are fractions of
+  // the expansion's variance: a missed share of 0.2 leaves every index up to
+  // that much low. Empty when the design has no leave-one-out error.
+  Eigen::VectorXd unexplained;
   // Largest total index of parameter i over the channels.
   double largestTotal(int i) const { return total.row(i).maxCoeff(); }
   // Parameters by decreasing largestTotal.

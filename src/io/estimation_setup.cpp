@@ -203,7 +203,7 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
     const CollocationDesign design(basis, c.collocation.sequence,
                                    c.collocation.designCount(c.pc_order), c.collocation.start_index,
                                    c.collocation.max_condition, c.collocation.projection,
-                                   c.collocation.nested);
+                                   c.collocation.nested, c.collocation.seed);
     return std::make_shared<PcPropagator>(std::move(model), basis, design, std::move(mapping),
                                           c.integration, c.collocation.threads);
   } catch (const std::invalid_argument& e) {

@@ -630,13 +630,18 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   const std::size_t terms = basisSize(n, c.pc_order, c.pc_truncation);
 
   YamlMapReader col = root.map("collocation");
-  std::string seq = toString(c.collocation.sequence);
+  // auto (the default): plain Halton up to kPlainHaltonMaxDimension germs,
+  // scrambled Halton above (collocation_design.h).
+  std::string seq = "auto";
   col.text("sequence", seq);
   try {
-    c.collocation.sequence = pointSequenceFromString(seq);
+    c.collocation.sequence =
+        seq == "auto" ? defaultPointSequence(n) : pointSequenceFromString(seq);
   } catch (const std::invalid_argument&) {
-    col.fail("sequence", "'" + seq + "'", "halton, hammersley, gauss or smolyak");
+    col.fail("sequence", "'" + seq + "'",
+             "auto, halton, scrambled_halton, hammersley, gauss or smolyak");
   }
+  if (seq == "auto") seq = toString(c.collocation.sequence);
   col.integer("points", c.collocation.points, 1, 1000000);
   col.integer("level", c.collocation.level, 0, 30);
   std::string projection = toString(c.collocation.projection);
@@ -665,6 +670,7 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
     col.fail("nested", "true", "false for sequence " + seq + " (nested rules are smolyak's)");
   }
   col.unsignedInteger("start_index", c.collocation.start_index);
+  col.unsignedInteger("seed", c.collocation.seed);
   col.number("max_condition", c.collocation.max_condition, 1.0, kInf);
   col.integer("threads", c.collocation.threads, 0, 1024);
   col.number("loo_warning", c.collocation.loo_warning, 0.0, kInf);

@@ -109,6 +109,7 @@ struct CollocationConfig {
   ProjectionMethod projection = ProjectionMethod::kAuto;
   bool nested = false;  // smolyak: nested Clenshaw-Curtis rules for symmetric bounded germs
   std::uint64_t start_index = 1;
+  std::uint64_t seed = 1;  // scrambled_halton: the scrambling's seed
   double max_condition = 1e8;
   int threads = 0;  // forecast threads; 0 = the machine's cores
   // Relative leave-one-out error of the forecast above which a warning is raised.

@@ -115,6 +115,14 @@ std::string toJson(const OfflineResult& r) {
                       {"total", per_channel}});
     }
     j["sensitivity"] = rows;  // ranked, total Sobol indices of the prior forecast
+    if (r.sensitivity.unexplained.size() > 0) {
+      Json missed = Json::object();
+      for (std::size_t c = 0; c < r.sensitivity.channels.size(); ++c) {
+        missed[r.sensitivity.channels[c]] =
+            r.sensitivity.unexplained(static_cast<Eigen::Index>(c));
+      }
+      j["sensitivity_unexplained"] = missed;  // leave-one-out share of each channel's variance
+    }
   }
   if (!r.pruned_tolerances.empty()) j["pruned_tolerances"] = r.pruned_tolerances;
   j["rejected_samples"] = r.rejected_samples;

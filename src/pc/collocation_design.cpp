@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "pc_ekf/pc/point_sets.h"
+#include "pc_ekf/pc/scrambled_halton.h"
 #include "pc_ekf/pc/sparse_grid.h"
 
 namespace pc_ekf {
@@ -20,8 +21,15 @@ std::string toString(PointSequence s) {
       return "gauss";
     case PointSequence::kSmolyak:
       return "smolyak";
+    case PointSequence::kScrambledHalton:
+      return "scrambled_halton";
   }
   throw std::invalid_argument("toString: unknown PointSequence value");
+}
+
+PointSequence defaultPointSequence(int dimension) {
+  return dimension > kPlainHaltonMaxDimension ? PointSequence::kScrambledHalton
+                                              : PointSequence::kHalton;
 }
 
 std::string toString(ProjectionMethod m) {
@@ -49,8 +57,9 @@ PointSequence pointSequenceFromString(const std::string& name) {
   if (name == "hammersley") return PointSequence::kHammersley;
   if (name == "gauss") return PointSequence::kGauss;
   if (name == "smolyak") return PointSequence::kSmolyak;
+  if (name == "scrambled_halton") return PointSequence::kScrambledHalton;
   throw std::invalid_argument("unknown collocation point sequence '" + name +
-                              "' (accepted: halton, hammersley, gauss, smolyak)");
+                              "' (accepted: halton, scrambled_halton, hammersley, gauss, smolyak)");
 }
 
 namespace {
@@ -65,7 +74,8 @@ std::vector<OrthonormalFamily> familiesOf(const PolynomialBasis& basis) {
 
 CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence sequence,
                                      int count, std::uint64_t halton_start, double max_condition,
-                                     ProjectionMethod projection, bool nested)
+                                     ProjectionMethod projection, bool nested,
+                                     std::uint64_t scramble_seed)
     : sequence_(sequence) {
   const int n = basis.dimension();
   const int s = basis.size();
@@ -111,6 +121,10 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
   switch (sequence) {
     case PointSequence::kHalton:
       points_ = mapToGerms(haltonPoints(count, n, halton_start), basis.germs());
+      break;
+    case PointSequence::kScrambledHalton:
+      points_ = mapToGerms(scrambledHaltonPoints(count, n, scramble_seed, halton_start),
+                           basis.germs());
       break;
     case PointSequence::kHammersley:
       points_ = mapToGerms(hammersleyPoints(count, n), basis.germs());

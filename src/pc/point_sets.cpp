@@ -1,5 +1,7 @@
 #include "pc_ekf/pc/point_sets.h"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
@@ -63,6 +65,20 @@ Eigen::MatrixXd hammersleyPoints(int count, int dimension) {
     for (int d = 1; d < dimension; ++d) points(q, d) = radicalInverse(i, primes[d - 1]);
   }
   return points;
+}
+
+double maxCoordinateCorrelation(const Eigen::MatrixXd& points) {
+  if (points.rows() < 2) return 0.0;
+  const Eigen::MatrixXd centred = points.rowwise() - points.colwise().mean();
+  const Eigen::MatrixXd cov = centred.transpose() * centred;
+  double largest = 0.0;
+  for (Eigen::Index i = 0; i < cov.rows(); ++i) {
+    for (Eigen::Index j = 0; j < i; ++j) {
+      const double denominator = std::sqrt(cov(i, i) * cov(j, j));
+      if (denominator > 0.0) largest = std::max(largest, std::abs(cov(i, j)) / denominator);
+    }
+  }
+  return largest;
 }
 
 Eigen::MatrixXd mapToGerms(const Eigen::MatrixXd& unit_points, const std::vector<GermSpec>& germs) {

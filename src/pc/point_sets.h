@@ -23,6 +23,11 @@ Eigen::MatrixXd haltonPoints(int count, int dimension, std::uint64_t start = 1);
 // radical inverses of i in bases 2, 3, ...
 Eigen::MatrixXd hammersleyPoints(int count, int dimension);
 
+// Largest |Pearson correlation| between two coordinates (columns) of a point
+// set: 0 for a design whose coordinates are uncorrelated; an i.i.d. uniform
+// design of Q points has about sqrt(2 ln(n(n-1)/2) / Q) (0.17 at Q = 306, n = 15).
+double maxCoordinateCorrelation(const Eigen::MatrixXd& points);
+
 // Maps unit-cube points (rows) through each germ's inverse CDF.
 Eigen::MatrixXd mapToGerms(const Eigen::MatrixXd& unit_points, const std::vector<GermSpec>& germs);
 

@@ -140,6 +140,21 @@ TEST(Config, TruncationKeys) {
   EXPECT_NE(e.find("pc.q_norm"), std::string::npos) << e;
 }
 
+TEST(Config, ScrambledHaltonKeys) {
+  const EstimatorConfig c = parseConfigString(
+      std::string("collocation: {sequence: scrambled_halton, seed: 9}\n") + kMinimal, "ok.yaml");
+  EXPECT_EQ(c.collocation.sequence, PointSequence::kScrambledHalton);
+  EXPECT_EQ(c.collocation.seed, 9u);
+  // auto (also the default) is plain Halton at this dimension (n <= 12).
+  EXPECT_EQ(parseConfigString(std::string("collocation: {sequence: auto}\n") + kMinimal, "ok.yaml")
+                .collocation.sequence,
+            PointSequence::kHalton);
+  EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").collocation.sequence, PointSequence::kHalton);
+  EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").collocation.seed, 1u);
+  const std::string e = errorOf(std::string("collocation: {sequence: sobol}\n") + kMinimal);
+  EXPECT_NE(e.find("scrambled_halton"), std::string::npos) << e;
+}
+
 TEST(Config, SparseGridKeys) {
   const EstimatorConfig c = parseConfigString(
       std::string(
