@@ -7,6 +7,8 @@
 #   rtf_n11_end_to_end       test/benchmarks/roll_plane_tolerances.yaml (n = 11)
 #   full_car_tolerances_rtf  test/benchmarks/full_car_tolerances.yaml (n = 12)
 #   rtf_paper_end_to_end     config/speed_bump.yaml (n = 2, N = 10)
+#   road_free_rtf_end_to_end config/vehicle_imu.yaml (road-free, n = 16) on its own
+#                            synthetic 10 s, 200 Hz drive (ISO B), read as a CSV
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/common.sh"
@@ -16,12 +18,13 @@ out=$2
 mkdir -p "$out"
 runs=${PC_EKF_BENCH_E2E_RUNS:-3}
 
-# best_wall CONFIG NAME -> prints the best wall time in s (null if a run failed)
+# best_wall CONFIG NAME [ARGS...] -> prints the best wall time in s (null if a run failed)
 best_wall() {
   local config=$1 name=$2 best=1e9 t0 t1
+  shift 2
   for i in $(seq "$runs"); do
     t0=$(date +%s.%N)
-    if ! "$bin/estimate_offline" --config "$config" --method one_step --out "$out/$name.$i" \
+    if ! "$bin/estimate_offline" --config "$config" --method one_step "$@" --out "$out/$name.$i" \
       >"$out/$name.$i.json" 2>"$out/$name.$i.err"; then
       echo null
       return
@@ -38,9 +41,16 @@ paper=$PC_EKF_ROOT/config/speed_bump.yaml
 n11_wall=$(best_wall "$n11" n11)
 car_wall=$(best_wall "$car" full_car)
 paper_wall=$(best_wall "$paper" paper)
-/usr/bin/python3 - "$out/end_to_end.json" "$n11_wall" "$car_wall" "$paper_wall" "$runs" <<'PY'
+imu=$PC_EKF_ROOT/config/vehicle_imu.yaml
+road_free_wall=null
+if "$bin/synthesize_bag" --config "$imu" --output "$out/road_free.bag" --csv "$out/road_free.csv" \
+  2>"$out/road_free_synthesis.err"; then
+  road_free_wall=$(best_wall "$imu" road_free --measurements "$out/road_free.csv")
+fi
+/usr/bin/python3 - "$out/end_to_end.json" "$n11_wall" "$car_wall" "$paper_wall" "$runs" \
+  "$road_free_wall" <<'PY'
 import json, sys
-path, n11, car, paper, runs = sys.argv[1:]
+path, n11, car, paper, runs, road_free = sys.argv[1:]
 def rtf(wall, duration=3.0):  # all three records are 3 s long
     return None if wall == "null" else duration / float(wall)
 def wall(w):
@@ -49,6 +59,8 @@ json.dump({
     "rtf_n11_end_to_end": rtf(n11),
     "full_car_tolerances_rtf": rtf(car),
     "rtf_paper_end_to_end": rtf(paper),
+    "road_free_rtf_end_to_end": rtf(road_free, 10.0),
+    "road_free_end_to_end_wall_s": wall(road_free),
     "n11_end_to_end_wall_s": wall(n11),
     "full_car_tolerances_wall_s": wall(car),
     "paper_end_to_end_wall_s": wall(paper),

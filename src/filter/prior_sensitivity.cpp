@@ -49,7 +49,10 @@ PriorSensitivity priorSensitivity(const PcPropagator& propagator, const std::vec
     s.first += first;
     s.total += total;
     s.variance += variance;
-    if (report.loo_error.size() == static_cast<Eigen::Index>(model.channelNames().size())) {
+    // The leave-one-out error covers the leading channels the model gives.
+    const bool covered = std::all_of(channels.begin(), channels.end(),
+                                     [&](int ch) { return ch < report.loo_error.size(); });
+    if (covered) {
       for (Eigen::Index c = 0; c < h.rows(); ++c) {
         missed[c] += report.loo_error[channels[c]] * report.loo_error[channels[c]] * variance[c];
       }

@@ -491,8 +491,14 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
   const std::size_t kChannels = model_channels.size(), selected = c.measurement.channels.size();
   YamlMapReader s = t.map("sensor");
   const auto perChannel = [&](const char* key, std::vector<double>& v, double min) {
-    const bool per_selected = s.isSequence(key) && s.sequence(key).size() == selected &&
-                              selected != kChannels;
+    const std::size_t given = s.isSequence(key) ? s.sequence(key).size() : 0;
+    if (given > 0 && given != selected && given != kChannels) {
+      s.fail(key, "a list of " + std::to_string(given),
+             "a list of " + std::to_string(selected) + " numbers (one per channel of "
+             "measurement.channels) or " + std::to_string(kChannels) +
+             " (one per channel of the model), or one number");
+    }
+    const bool per_selected = given == selected && selected != kChannels;
     s.numberPerItem(key, v, per_selected ? selected : kChannels, min, kInf);
     if (per_selected && !v.empty()) {
       v = inModelOrder(v, c.measurement.channels, model_channels, 0.0);

@@ -73,7 +73,7 @@ Eigen::MatrixXd sampledChannels(const Scenario& s, const ModelBatch& batch,
     const double t1 = s.series[k].time;
     integrate(*s.model, batch, t, t1, y, settings);
     t = t1;
-    z.middleRows(4 * k, 4) = s.model->observationMatrix() * y.matrix();
+    z.middleRows(4 * k, 4) = (s.model->observationMatrix() * y.matrix()).topRows(4);
   }
   return z;
 }

@@ -105,7 +105,8 @@ TEST(ModelDescription, TypeAndModelShareOneDescription) {
   EXPECT_EQ(c.model->values, fullCarDescription().parameters().defaults());
   const EstimatorConfig r = parseConfigString(withUncertain(""), "rp.yaml");
   EXPECT_EQ(&r.model_type->description(), &rollPlaneDescription());
-  EXPECT_EQ(r.measurement.channels, rollPlaneDescription().channelNames());
+  // The default selection: the suspension channels (IMU channels by name).
+  EXPECT_EQ(r.measurement.channels, rollPlaneDescription().defaultChannelNames());
   const auto& s = rollPlaneDescription().suspensions();
   ASSERT_EQ(s.size(), 2u);
   EXPECT_EQ(s[1].position_channel, 1);  // u2

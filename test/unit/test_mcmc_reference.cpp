@@ -152,7 +152,7 @@ TEST(McmcReference, SpeedBumpAgreesWithTheGridPosterior) {
   std::normal_distribution<double> normal;
   MeasurementSeries series;
   for (std::size_t k = 0; k < times.size(); ++k) {
-    series.push_back({times[k], {0, 1, 2, 3}, z[k].col(0)});
+    series.push_back({times[k], {0, 1, 2, 3}, z[k].col(0).head(4)});
     for (int j = 0; j < 4; ++j) series[k].values[j] += 0.01 * std::abs(z[k](j, 0)) * normal(rng);
   }
   const NoiseModel noise{0.01, 1e-12};

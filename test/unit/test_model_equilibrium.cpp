@@ -138,7 +138,7 @@ TEST(InvalidReason, NamesTheOffendingParameter) {
 
 TEST(InvalidReason, PrepareRejectsInadmissibleColumn) {
   const RollPlaneModel model = makeModel();
-  Eigen::MatrixXd params(16, 2);
+  Eigen::MatrixXd params(17, 2);
   params.col(0) = model.nominalParameters();
   params.col(1) = model.nominalParameters();
   params(15, 1) = 2.0;

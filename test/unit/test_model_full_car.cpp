@@ -256,7 +256,7 @@ Eigen::MatrixXd offCentreColumns() {
   far.added_mass = 300.0;
   far.added_mass_x = 0.2;
   far.added_mass_y = 0.1;
-  Eigen::MatrixXd params(19, 3);
+  Eigen::MatrixXd params(21, 3);
   params.col(0) = FullCarParameters().toVector();
   params.col(1) = truth().toVector();
   params.col(2) = far.toVector();
@@ -429,7 +429,7 @@ TEST(FullCarDynamics, CentredMassOnSymmetricBumpNeverRolls) {
   s.height_left = s.height_right = 0.1;
   s.right_offset = 0.0;
   const FullCarModel model(FullCarParameters(), bumpRoad(s));
-  Eigen::MatrixXd params(19, 2);
+  Eigen::MatrixXd params(21, 2);
   FullCarParameters p;
   p.added_mass_y = 0.75;  // on the centre line
   params.col(0) = p.toVector();
@@ -467,7 +467,7 @@ TEST(FullCarDynamics, MirroredMassMirrorsTheResponse) {
   s.right_offset = 0.0;
   s.height_left = s.height_right = 0.08;
   const FullCarModel model(FullCarParameters(), bumpRoad(s));
-  Eigen::MatrixXd params(19, 2);
+  Eigen::MatrixXd params(21, 2);
   FullCarParameters p = truth();
   params.col(0) = p.toVector();
   p.added_mass_y = p.track_width - p.added_mass_y;
@@ -498,7 +498,7 @@ class PlainOnly : public ModelBatch {
 };
 
 Eigen::MatrixXd spreadColumns(int count, DamperLaw law) {
-  Eigen::MatrixXd params(19, count);
+  Eigen::MatrixXd params(21, count);
   for (int q = 0; q < count; ++q) {
     FullCarParameters p = truth();
     const double s = static_cast<double>(q) / count;  // 0 .. 1
@@ -635,7 +635,7 @@ TEST(FullCarModel, InvalidReasonForEachDomainRule) {
   const auto& names = model.parameterNames();
   EXPECT_EQ(model.invalidReason(nominal), "");
   EXPECT_EQ(model.invalidReason(truth().toVector()), "");
-  EXPECT_NE(model.invalidReason(nominal.head(18)).find("expected 19"), std::string::npos);
+  EXPECT_NE(model.invalidReason(nominal.head(20)).find("expected 21"), std::string::npos);
   const auto reason = [&](int i, double value) {
     Eigen::VectorXd v = nominal;
     v[i] = value;
@@ -644,7 +644,7 @@ TEST(FullCarModel, InvalidReasonForEachDomainRule) {
   const auto expectContains = [](const std::string& text, const std::string& part) {
     EXPECT_NE(text.find(part), std::string::npos) << "'" << text << "' lacks '" << part << "'";
   };
-  for (int i = 0; i < 19; ++i) {
+  for (int i = 0; i < 21; ++i) {
     expectContains(reason(i, std::numeric_limits<double>::quiet_NaN()), names[i] + " = nan");
     expectContains(reason(i, std::numeric_limits<double>::infinity()), "is not finite");
   }
@@ -679,7 +679,7 @@ TEST(FullCarModel, InvalidReasonForEachDomainRule) {
   // Finite but overflowing: the equilibrium cannot be solved.
   expectContains(reason(0, 1e308), "static equilibrium");
   // prepare() refuses inadmissible columns.
-  Eigen::MatrixXd params(19, 2);
+  Eigen::MatrixXd params(21, 2);
   params.col(0) = nominal;
   params.col(1) = nominal;
   params(17, 1) = 3.0;

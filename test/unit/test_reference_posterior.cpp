@@ -221,7 +221,7 @@ VehicleCase makeCase(std::shared_ptr<const ContactRoad> road, int samples, std::
   const auto z = simulateChannels(*c.model, params, times, c.integration);
   std::mt19937_64 rng(seed);
   for (std::size_t k = 0; k < times.size(); ++k) {
-    c.series.push_back({times[k], {0, 1, 2, 3}, z[k].col(0)});
+    c.series.push_back({times[k], {0, 1, 2, 3}, z[k].col(0).head(4)});
     for (int j = 0; j < 4; ++j) c.series[k].values[j] += 0.01 * std::abs(z[k](j, 0)) * normal(rng);
   }
   return c;
