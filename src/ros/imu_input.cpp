@@ -122,7 +122,10 @@ std::vector<ImuReleased> ImuInput::release(double now) {
       stats_.max_abs_offset = std::max(stats_.max_abs_offset, std::abs(stats_.last_offset));
       continue;
     }
-    const bool expired = now - pending_.front().arrival >= timeout_;
+    // As the road's wait: time spent computing with IMU messages queued does
+    // not count (the wait runs from the sample's arrival and the last message).
+    const bool expired = now - pending_.front().arrival >= timeout_ &&
+                         (stats_.last_message_wall == 0.0 || now - stats_.last_message_wall >= timeout_);
     const bool full = pending_.size() > max_pending_;
     if (!expired && !full) break;
     ++stats_.samples_without_imu[expired ? "wait_expired" : "queue_full"];
