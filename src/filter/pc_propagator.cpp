@@ -40,6 +40,11 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
   for (const UncertainParameter& u : mapping_.uncertain()) {
     full_index_.push_back(model_->parameterIndex(u.name));  // valid: checked by the mapping
   }
+  int modelled = 0;
+  while (modelled < model_->observationMatrix().rows() && model_->channelModelled(modelled)) {
+    ++modelled;
+  }
+  loo_observation_ = model_->observationMatrix().topRows(modelled);
 }
 
 std::shared_ptr<const PcPropagator> PcPropagator::withThreads(int threads) const {

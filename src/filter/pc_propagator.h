@@ -28,8 +28,9 @@ struct ForecastReport {
   bool ok = true;
   std::string first_problem;
   // Relative leave-one-out error of the projection per model channel
-  // (CollocationDesign::leaveOneOutError of the channels at the points); empty
-  // when a point was dropped or the design has none (Q = S).
+  // (CollocationDesign::leaveOneOutError of the channels at the points), for
+  // the leading channels the model gives as built (MechanicalModel::
+  // channelModelled); empty when a point was dropped or the design has none (Q = S).
   Eigen::VectorXd loo_error;
   void merge(const ForecastReport& other);
 };
@@ -108,6 +109,9 @@ class PcPropagator {
   ParameterMapping mapping_;
   IntegratorSettings settings_;
   std::vector<int> full_index_;  // model parameter index of each uncertain parameter
+  // H's rows of the leading channels the model gives as built (the
+  // leave-one-out error's channels; all of them with readings as states).
+  Eigen::MatrixXd loo_observation_;
   std::shared_ptr<ColumnWorkers> workers_;  // null: one thread
   mutable long integrations_ = 0;  // point-intervals integrated (cost accounting)
 };

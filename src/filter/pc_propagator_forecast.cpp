@@ -116,7 +116,8 @@ bool PcPropagator::forecastWith(ForecastSplit split, Eigen::MatrixXd& x, double 
 
   w.at_points.resize(x.rows(), q_count);
   w.params.resize(nominal.size(), q_count);
-  const Eigen::MatrixXd& h = model_->observationMatrix();
+  // The channels the model gives as built (a linear model's IMU rows are not).
+  const Eigen::MatrixXd& h = loo_observation_;
   const bool loo = design_.hasLeaveOneOut();
 
   if (!blocked) {

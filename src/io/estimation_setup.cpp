@@ -1,6 +1,7 @@
 #include "pc_ekf/io/estimation_setup.h"
 
 #include <cmath>
+#include <sstream>
 
 #include "pc_ekf/io/measurement_csv.h"
 
@@ -161,6 +162,36 @@ EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
   s.threads = c.grid.threads;
   s.square_root = c.enkf.square_root;
   return s;
+}
+
+std::string zeroConventionProblem(const EstimatorConfig& c, const MeasurementSeries& series) {
+  const int channel = c.model_type->description().channelIndex("accel_z");
+  if (channel < 0) return "";
+  double sum = 0.0;
+  long count = 0;
+  for (const Measurement& m : series) {
+    for (std::size_t i = 0; i < m.channels.size(); ++i) {
+      if (m.channels[i] != channel) continue;
+      sum += m.values[static_cast<Eigen::Index>(i)];
+      ++count;
+    }
+  }
+  if (count == 0) return "";
+  const int g_index = c.model_type->description().parameters().index("gravity");
+  const double g = g_index >= 0 ? c.modelParameters()->values[g_index] : 9.81;
+  const double mean = sum / static_cast<double>(count);
+  const bool tare = c.measurement.zero == ZeroConvention::kTare;
+  const double expected = tare ? g : 0.0;
+  if (std::abs(mean - expected) <= 0.5 * g) return "";
+  std::ostringstream o;
+  o << "accel_z averages " << mean << " m/s^2 over " << count << " readings, but measurement.zero: "
+    << (tare ? "tare expects a raw IMU (about +" : "rest expects deviations from rest (about ")
+    << expected << " m/s^2): "
+    << (tare ? (mean < -0.5 * g ? "the IMU's z axis points down (REP 103: z up)"
+                                : "gravity taken out? set measurement.zero: rest")
+             : (mean > 0.0 ? "gravity left in? set measurement.zero: tare for a raw IMU"
+                           : "the IMU's z axis points down (REP 103: z up)"));
+  return o.str();
 }
 
 std::vector<int> channelIndices(const EstimatorConfig& c) {

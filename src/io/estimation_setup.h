@@ -41,6 +41,11 @@ std::shared_ptr<const ParameterPdfSampler> makePdfSampler(const EstimatorConfig&
 // The grid: section (and pdf.bins) as settings of the exact posterior.
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c);
 std::vector<int> channelIndices(const EstimatorConfig& c);
+// "" or why a record's accel_z does not read as measurement.zero says: with
+// rest it should average about 0 (deviations from rest), with tare about +g
+// (a raw IMU, REP 145). A mean beyond g/2 of that is gravity left in, taken
+// out, or a z axis pointing down.
+std::string zeroConventionProblem(const EstimatorConfig& c, const MeasurementSeries& series);
 
 // `c` with the model parameters `names` declared uncertain as well: nominal
 // the configured vehicle's value, relative_range `range`, a Beta(2,2) germ,

@@ -135,7 +135,10 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   filter.assessSupport(&last);
   r->rejected_samples = filter.rejected();
   r->relinearized = last.restarts;
-  r->loo_channels = c.model_type->channelNames();
+  // The leading channels the model gives as built (ForecastReport::loo_error).
+  for (std::size_t i = 0; i < model->channelNames().size() && model->channelModelled(static_cast<int>(i)); ++i) {
+    r->loo_channels.push_back(model->channelNames()[i]);
+  }
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler, last.coefficients);

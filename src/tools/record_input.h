@@ -43,6 +43,10 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   if (selected.size() < config.model_type->channelNames().size()) {
     r.series = onlyChannels(r.series, selected);
   }
+  const std::string zero = zeroConventionProblem(config, r.series);
+  if (!zero.empty()) {
+    throw ConfigError((bag.empty() ? csv : bag) + ": " + zero);
+  }
   return r;
 }
 
