@@ -1,5 +1,8 @@
 #include "pc_ekf/ros/replay_player.h"
 
+#include <memory>
+#include <optional>
+
 #include <ros/console.h>
 #include <ros/master.h>
 #include <ros/this_node.h>
@@ -53,6 +56,7 @@ BagReplayer::BagReplayer(ros::NodeHandle& nh, ReplayBag& bag, const ReplayOption
                      "' (" + bag_.topics().at(*gated).datatype + ") has no std_msgs/Header");
     }
     lossless_topic_ = *gated;
+    if (const auto imu = bag_.findTopic(kImuTopic)) imu_topic_ = *imu;
     handshake_ = std::make_unique<EstimateHandshake>(nh_, options_.estimate_topic);
   }
 }
@@ -140,6 +144,27 @@ bool BagReplayer::playOnce() {
   const ros::WallTime start = ros::WallTime::now();
   std::size_t index = 0;
   int next_progress = 25;
+  // IMU messages published ahead of their place (imu_topic_ with the handshake).
+  std::unique_ptr<rosbag::View> imu_view;
+  rosbag::View::iterator imu_next;
+  std::size_t imu_ahead = 0, imu_seen = 0;
+  std::optional<ros::Time> imu_last;
+  if (handshake_ && !imu_topic_.empty()) {
+    imu_view = std::make_unique<rosbag::View>(bag_.bag(), rosbag::TopicQuery(imu_topic_));
+    imu_next = imu_view->begin();
+  }
+  const auto publishImuThrough = [&](const ros::Time& stamp) {
+    if (!imu_view) return;
+    while ((!imu_last || *imu_last < stamp) && imu_next != imu_view->end()) {
+      const rosbag::MessageInstance& imu = *imu_next;
+      imu_last = headerStamp(imu);
+      publishers_.at(imu.getTopic()).publish(imu);
+      ++counts_.per_topic[bag_.topics().at(imu.getTopic()).topic];
+      ++imu_ahead;
+      ++imu_next;
+    }
+  };
+  std::optional<ros::Time> awaited;  // the sample whose answer the next wait is for
   for (const rosbag::MessageInstance& m : view) {
     if (!ros::ok()) return false;
     if (options_.rate > 0.0 &&
@@ -151,9 +176,25 @@ bool BagReplayer::playOnce() {
       clock.clock = m.getTime();
       clock_.publish(clock);
     }
+    if (imu_view && m.getTopic() == imu_topic_) {
+      // Published ahead already, or now in its place.
+      if (++imu_seen <= imu_ahead) {
+        ++index;
+        continue;
+      }
+      imu_last = headerStamp(m);
+      ++imu_ahead;
+      ++imu_next;
+      publishers_.at(m.getTopic()).publish(m);
+      ++counts_.per_topic[bag_.topics().at(m.getTopic()).topic];
+      ++index;
+      continue;
+    }
     if (handshake_ && m.getTopic() == lossless_topic_) {
+      if (awaited) publishImuThrough(*awaited);
       handshake_->waitForAnswer(options_.lossless_timeout);  // the previous sample's
-      handshake_->expect(headerStamp(m));
+      awaited = headerStamp(m);
+      handshake_->expect(*awaited);
     }
     publishers_.at(m.getTopic()).publish(m);
     ++counts_.per_topic[bag_.topics().at(m.getTopic()).topic];
@@ -164,6 +205,7 @@ bool BagReplayer::playOnce() {
       next_progress += 25;
     }
   }
+  if (awaited) publishImuThrough(*awaited);  // before finish() waits for the last answer
   ++counts_.passes;
   counts_.wall_seconds += (ros::WallTime::now() - start).toSec();
   return true;

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 #include <pc_ekf/ParameterEstimate.h>
 #include <ros/ros.h>
+#include <std_srvs/Trigger.h>
 
 #include <cmath>
 #include <map>
@@ -27,6 +28,33 @@ std::string imuConfig() { return std::string(PC_EKF_SOURCE_DIR) + "/test/ros/est
 ::testing::AssertionResult close(double a, double b, double scale, const std::string& what) {
   if (std::abs(a - b) <= kRelativeTolerance * std::abs(scale)) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << what << ": node " << a << " vs offline " << b;
+}
+
+void compareWithOffline(const std::vector<ParameterEstimate>& estimates,
+                        const std::vector<std::vector<double>>& offline,
+                        const std::map<std::string, std::size_t>& column) {
+  ASSERT_EQ(estimates.size(), offline.size());
+  double max_relative = 0.0;
+  for (std::size_t k = 0; k < kSamples; ++k) {
+    const ParameterEstimate& e = estimates[k];
+    ASSERT_EQ(e.sample_index, k + 1);
+    ASSERT_TRUE(close(e.time, offline[k].at(column.at("t")), 1.0, "t"));
+    for (std::size_t i = 0; i < e.names.size(); ++i) {
+      const std::string& p = e.names[i];
+      const double mean = offline[k].at(column.at(p + "_mean"));
+      const std::string at = "sample " + std::to_string(k + 1) + " " + p;
+      ASSERT_TRUE(close(e.mean[i], mean, mean, at + " mean"));
+      const double sd = offline[k].at(column.at(p + "_stddev"));
+      ASSERT_TRUE(close(e.stddev[i], sd, sd, at + " stddev"));
+      max_relative = std::max(max_relative, std::abs(e.stddev[i] - sd) / sd);
+      for (std::size_t j = 0; j < e.term_count; ++j) {
+        ASSERT_TRUE(close(e.coefficients[i * e.term_count + j],
+                          offline[k].at(column.at(p + "_c" + std::to_string(j))), mean,
+                          at + " c" + std::to_string(j)));
+      }
+    }
+  }
+  ::testing::Test::RecordProperty("max_relative_stddev_difference", std::to_string(max_relative));
 }
 
 TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
@@ -105,27 +133,9 @@ TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
 
   ASSERT_EQ(estimates.size(), kSamples) << "samples lost";
   EXPECT_EQ(truths, 1);
-  double max_relative = 0.0;
-  for (std::size_t k = 0; k < kSamples; ++k) {
-    const ParameterEstimate& e = estimates[k];
-    ASSERT_EQ(e.sample_index, k + 1);
-    ASSERT_TRUE(close(e.time, offline[k].at(column.at("t")), 1.0, "t"));
-    for (std::size_t i = 0; i < e.names.size(); ++i) {
-      const std::string& p = e.names[i];
-      const double mean = offline[k].at(column.at(p + "_mean"));
-      const std::string at = "sample " + std::to_string(k + 1) + " " + p;
-      ASSERT_TRUE(close(e.mean[i], mean, mean, at + " mean"));
-      const double sd = offline[k].at(column.at(p + "_stddev"));
-      ASSERT_TRUE(close(e.stddev[i], sd, sd, at + " stddev"));
-      max_relative = std::max(max_relative, std::abs(e.stddev[i] - sd) / sd);
-      for (std::size_t j = 0; j < e.term_count; ++j) {
-        ASSERT_TRUE(close(e.coefficients[i * e.term_count + j],
-                          offline[k].at(column.at(p + "_c" + std::to_string(j))), mean,
-                          at + " c" + std::to_string(j)));
-      }
-    }
-  }
-  RecordProperty("max_relative_stddev_difference", std::to_string(max_relative));
+  compareWithOffline(estimates, offline, column);
+  if (HasFatalFailure()) return;
+
 
   ASSERT_TRUE(spinUntil(15.0, spin, [&] {
     return imu.count("samples aligned") && imu["samples aligned"] == std::to_string(kSamples);
@@ -139,6 +149,24 @@ TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
   EXPECT_NEAR(std::stod(imu["max |stamp offset| (ms)"]), 2.0, 1e-6);
   EXPECT_EQ(imu["imu rate changes"], "0");
   RecordProperty("imu_rate_hz", imu["imu rate (Hz, from stamps)"]);
+
+  // replay_node with the lossless handshake, as fast as the node answers:
+  // the IMU messages a sample needs are published ahead of the next sample.
+  std_srvs::Trigger reset;
+  ASSERT_TRUE(ros::service::call("/estimator_node/reset", reset)) << "no ~reset";
+  spinUntil(2.0, spin, [&] { return !estimates.empty() && estimates.back().sample_index == 0; });
+  estimates.clear();
+  ChildProcess replay(siblingExecutable("replay_node"),
+                      {"_bag:=" + bag, "_rate:=0", "_lossless:=true", "_lossless_timeout:=5",
+                       "__name:=replay_imu"},
+                      scratch.file("replay.out"), scratch.file("replay.err"));
+  ASSERT_TRUE(replay.waitFor(120.0, spin)) << "replay_node did not finish";
+  ASSERT_EQ(replay.status(), 0) << replay.err();
+  spinUntil(10.0, spin, [&] { return estimates.size() >= kSamples; });
+  spinUntil(0.5, spin, [] { return false; });
+  ASSERT_EQ(estimates.size(), kSamples) << "samples lost (lossless replay)";
+  compareWithOffline(estimates, offline, column);
+  EXPECT_EQ(replay.err().find("going on"), std::string::npos) << "a handshake timed out";
 }
 
 }  // namespace
