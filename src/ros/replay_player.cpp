@@ -1,13 +1,14 @@
 #include "pc_ekf/ros/replay_player.h"
 
-#include <memory>
 #include <optional>
+#include <vector>
 
 #include <ros/console.h>
 #include <ros/master.h>
 #include <ros/this_node.h>
 #include <rosbag/view.h>
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/Imu.h>
 
 #include <algorithm>
 #include <iomanip>
@@ -144,25 +145,33 @@ bool BagReplayer::playOnce() {
   const ros::WallTime start = ros::WallTime::now();
   std::size_t index = 0;
   int next_progress = 25;
-  // IMU messages published ahead of their place (imu_topic_ with the handshake).
-  std::unique_ptr<rosbag::View> imu_view;
-  rosbag::View::iterator imu_next;
+  // IMU messages published ahead of their place (imu_topic_ with the
+  // handshake). Read into memory first: two views reading one bag at once
+  // are not safe.
+  std::vector<sensor_msgs::Imu::ConstPtr> imu_msgs;
+  if (handshake_ && !imu_topic_.empty()) {
+    rosbag::View imu_view(bag_.bag(), rosbag::TopicQuery(imu_topic_));
+    for (const rosbag::MessageInstance& imu : imu_view) {
+      const auto msg = imu.instantiate<sensor_msgs::Imu>();
+      if (!msg) {  // another definition: no look-ahead
+        imu_msgs.clear();
+        break;
+      }
+      imu_msgs.push_back(msg);
+    }
+  }
+  const bool look_ahead = !imu_msgs.empty();
   std::size_t imu_ahead = 0, imu_seen = 0;
   std::optional<ros::Time> imu_last;
-  if (handshake_ && !imu_topic_.empty()) {
-    imu_view = std::make_unique<rosbag::View>(bag_.bag(), rosbag::TopicQuery(imu_topic_));
-    imu_next = imu_view->begin();
-  }
+  const auto publishNextImu = [&] {
+    const sensor_msgs::Imu& imu = *imu_msgs[imu_ahead];
+    if (!imu_last || *imu_last < imu.header.stamp) imu_last = imu.header.stamp;
+    publishers_.at(imu_topic_).publish(imu);
+    ++counts_.per_topic[bag_.topics().at(imu_topic_).topic];
+    ++imu_ahead;
+  };
   const auto publishImuThrough = [&](const ros::Time& stamp) {
-    if (!imu_view) return;
-    while ((!imu_last || *imu_last < stamp) && imu_next != imu_view->end()) {
-      const rosbag::MessageInstance& imu = *imu_next;
-      imu_last = headerStamp(imu);
-      publishers_.at(imu.getTopic()).publish(imu);
-      ++counts_.per_topic[bag_.topics().at(imu.getTopic()).topic];
-      ++imu_ahead;
-      ++imu_next;
-    }
+    while ((!imu_last || *imu_last < stamp) && imu_ahead < imu_msgs.size()) publishNextImu();
   };
   std::optional<ros::Time> awaited;  // the sample whose answer the next wait is for
   for (const rosbag::MessageInstance& m : view) {
@@ -176,17 +185,9 @@ bool BagReplayer::playOnce() {
       clock.clock = m.getTime();
       clock_.publish(clock);
     }
-    if (imu_view && m.getTopic() == imu_topic_) {
+    if (look_ahead && m.getTopic() == imu_topic_) {
       // Published ahead already, or now in its place.
-      if (++imu_seen <= imu_ahead) {
-        ++index;
-        continue;
-      }
-      imu_last = headerStamp(m);
-      ++imu_ahead;
-      ++imu_next;
-      publishers_.at(m.getTopic()).publish(m);
-      ++counts_.per_topic[bag_.topics().at(m.getTopic()).topic];
+      if (++imu_seen > imu_ahead && imu_ahead < imu_msgs.size()) publishNextImu();
       ++index;
       continue;
     }
