@@ -14,7 +14,8 @@ struct Measurement {
   // Optional, per value: the sensor's own variance for this reading (an IMU
   // message's covariance, docs/nodes.md); NaN or an empty vector = none (the
   // NoiseModel's rule). Where given, R_jj = variance + (r_relative_c z_j)^2.
-  Eigen::VectorXd variances;
+  // (Initialised here so that Measurement{t, channels, values} stays warning-free.)
+  Eigen::VectorXd variances{};
 };
 
 using MeasurementSeries = std::vector<Measurement>;
