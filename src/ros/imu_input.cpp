@@ -136,9 +136,16 @@ std::vector<ImuReleased> ImuInput::release(double now) {
 }
 
 void ImuInput::reset() {
-  // Samples waiting for the IMU belong to the abandoned run.
+  // Samples waiting for the IMU belong to the abandoned run, and so do the
+  // buffered IMU messages: a replay from the start must not find them (its
+  // first sample could arrive before its first IMU message and be judged
+  // against the old ones).
   pending_.clear();
   stats_.waiting = 0;
+  aligner_.reset();
+  have_last_ = false;
+  mean_interval_ = 0.0;
+  intervals_ = 0;
 }
 
 }  // namespace pc_ekf
