@@ -1,6 +1,8 @@
 #include "pc_ekf/filter/measurement.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <stdexcept>
 
 namespace pc_ekf {
@@ -16,6 +18,12 @@ Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
       relative[i] = (channel_relative[c] * m.values[i]) * (channel_relative[c] * m.values[i]);
     }
   }
+  const bool own = m.variances.size() != 0;
+  if (own && m.variances.size() != m.values.size()) {
+    throw std::invalid_argument("noise: " + std::to_string(m.variances.size()) +
+                                " per-sample variances for " + std::to_string(m.values.size()) +
+                                " values");
+  }
   Eigen::VectorXd v(m.values.size());
   if (rule == NoiseRule::kPaper) {
     v = relative.max(r_floor).matrix();
@@ -24,6 +32,11 @@ Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
       const int c = m.channels[static_cast<std::size_t>(i)];
       if (c < 0 || c >= channel_std.size()) throw std::invalid_argument("noise: no sensor std for channel");
       v[i] = channel_std[c] * channel_std[c] + relative[i];
+    }
+  }
+  if (own) {
+    for (Eigen::Index i = 0; i < v.size(); ++i) {
+      if (std::isfinite(m.variances[i])) v[i] = m.variances[i] + relative[i];
     }
   }
   if (channel_extra_variance.size() != 0) {
@@ -53,13 +66,19 @@ MeasurementSeries onlyChannels(const MeasurementSeries& series, const std::vecto
   for (const Measurement& m : series) {
     Measurement kept;
     kept.time = m.time;
-    std::vector<double> values;
+    std::vector<double> values, variances;
+    const bool own = m.variances.size() != 0;
     for (std::size_t i = 0; i < m.channels.size(); ++i) {
       if (std::find(keep.begin(), keep.end(), m.channels[i]) == keep.end()) continue;
       kept.channels.push_back(m.channels[i]);
       values.push_back(m.values[static_cast<Eigen::Index>(i)]);
+      if (own) variances.push_back(m.variances[static_cast<Eigen::Index>(i)]);
     }
     kept.values = Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
+    if (own) {
+      kept.variances =
+          Eigen::Map<const Eigen::VectorXd>(variances.data(), static_cast<Eigen::Index>(variances.size()));
+    }
     out.push_back(std::move(kept));
   }
   return out;

@@ -11,6 +11,11 @@ struct Measurement {
   double time = 0.0;           // s since the time origin (vehicle at rest at t = 0)
   std::vector<int> channels;   // indices into the model's channelNames(), ascending
   Eigen::VectorXd values;      // one per entry of `channels`
+  // Optional, per value: the sensor's own variance for this reading (an IMU
+  // message's covariance, docs/nodes.md); NaN or an empty vector = none (the
+  // NoiseModel's rule). Where given, R_jj = variance + (r_relative_c z_j)^2.
+  // (Initialised here so that Measurement{t, channels, values} stays warning-free.)
+  Eigen::VectorXd variances{};
 };
 
 using MeasurementSeries = std::vector<Measurement>;

@@ -321,6 +321,7 @@ void readNode(YamlMapReader r, NodeConfig& n, const ModelType& type) {
   r.integer("pdf_every", n.pdf_every, 1, 1000000000);
   r.number("road_wait_timeout", n.road_wait_timeout, 0.0, 3600.0);
   r.integer("max_pending_samples", n.max_pending_samples, 1, 100000000);
+  r.number("imu_max_gap", n.imu_max_gap, 1e-6, 3600.0);
   r.integer("max_batch_samples", n.max_batch_samples, 1, 100000000);
   r.integer("max_road_samples", n.max_road_samples, 2, 1000000000);
   r.integer("queue_size", n.queue_size, 1, 100000000);

@@ -180,7 +180,10 @@ struct NodeConfig {
   bool publish_pdf = true;
   int pdf_every = 1;               // publish parameter_pdf every k-th sample
   double road_wait_timeout = 0.5;  // s (wall clock) without road data before a sample goes on
-  int max_pending_samples = 1000;  // samples waiting for road data
+  int max_pending_samples = 1000;  // samples waiting for road data (or for the IMU)
+  // imu/data (docs/nodes.md "Clocks"): two IMU messages further apart than
+  // this do not bracket a suspension sample (the IMU stopped): no IMU channels.
+  double imu_max_gap = 0.1;  // s
   int max_batch_samples = 100000;  // kept for ~estimate_batch (the first ones)
   int max_road_samples = 1000000;  // road buffer bound
   int queue_size = 20000;          // subscriber and publisher queues

@@ -113,7 +113,7 @@ struct StampedSample {
 
 // Samples with equal stamps observing disjoint channels become one sample.
 MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedSample>& raw,
-                                   int channels) {
+                                   int channels, std::vector<std::int64_t>* stamps) {
   std::stable_sort(raw.begin(), raw.end(),
                    [](const StampedSample& a, const StampedSample& b) { return a.ns < b.ns; });
   MeasurementSeries out;
@@ -146,6 +146,7 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
     }
     merged.values = Eigen::Map<const Eigen::VectorXd>(kept.data(), kept.size());
     out.push_back(std::move(merged));
+    stamps->push_back(raw[i].ns);
     i = j;
   }
   return out;
@@ -203,6 +204,48 @@ void readContactRoad(const std::string& path, BagRecord& record,
   }
 }
 
+// The IMU channels of every sample by the rule of imu_alignment.h (the node's).
+void alignBagImu(const std::string& path, const BagReadOptions& options,
+                 const std::vector<sensor_msgs::Imu::ConstPtr>& msgs,
+                 const std::vector<std::int64_t>& stamps, BagRecord& record) {
+  if (record.imu_topic.empty()) {
+    record.warnings.push_back("measurement.channels select IMU channels but " + path +
+                              " has no sensor_msgs/Imu on a topic ending in '" +
+                              options.imu_topic + "': samples without IMU channels");
+    return;
+  }
+  std::vector<ImuReading> readings;
+  readings.reserve(msgs.size());
+  for (const auto& msg : msgs) {
+    ++record.imu_messages;
+    ImuConversion c = readingFromImu(*msg, options.imu);
+    record.imu_problems += static_cast<int>(c.problems.size());
+    for (const auto& p : c.problems) {
+      record.warnings.push_back("'" + record.imu_topic + "' message stamped " +
+                                stampText(msg->header.stamp) + ": " + p);
+    }
+    if (c.empty()) {
+      ++record.imu_empty;
+      continue;
+    }
+    readings.push_back(std::move(c.reading));
+  }
+  record.samples =
+      alignImuRecord(record.samples, stamps, readings, options.imu_max_gap, &record.imu);
+  const ImuAlignmentCounts& n = record.imu;
+  if (n.readings_refused > 0) {
+    record.warnings.push_back(std::to_string(n.readings_refused) + " '" + record.imu_topic +
+                              "' message(s) stamped at or before the previous one: not used");
+  }
+  if (n.no_bracket + n.gap > 0) {
+    record.warnings.push_back(std::to_string(n.no_bracket) +
+                              " sample(s) without IMU readings on both sides and " +
+                              std::to_string(n.gap) + " with IMU readings more than " +
+                              std::to_string(options.imu_max_gap) +
+                              " s apart around them (node.imu_max_gap): no IMU channels there");
+  }
+}
+
 }  // namespace
 
 bool topicMatches(const std::string& topic, const std::string& suffix) {
@@ -236,6 +279,7 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   std::vector<RoadHeights::ConstPtr> heights_msgs;
   std::vector<sensor_msgs::JointState::ConstPtr> joint_msgs;
   std::vector<ParameterEstimate::ConstPtr> truth_msgs;
+  std::vector<sensor_msgs::Imu::ConstPtr> imu_msgs;
   std::vector<std::string> topics;
   try {
     record.road_topic = options.contacts.empty()
@@ -270,6 +314,11 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
     }
     joint_msgs = readTopic<sensor_msgs::JointState>(path, bag, record.joint_states_topic);
     truth_msgs = readTopic<ParameterEstimate>(path, bag, truth_topic);
+    if (options.imu.any()) {
+      record.imu_topic = findTopic<sensor_msgs::Imu>(path, bag, options.imu_topic, &topics);
+      // Bag (record) order: the order a live node receives them in.
+      imu_msgs = readTopic<sensor_msgs::Imu>(path, bag, record.imu_topic);
+    }
   } catch (const BagError&) {
     throw;
   } catch (const std::exception& e) {
@@ -321,13 +370,17 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
                    "' (no samples); first problem: " +
                    (record.warnings.empty() ? std::string("none") : record.warnings.front()));
   }
-  record.samples = mergeEqualStamps(path, raw, options.joints.channelCount());
+  std::vector<std::int64_t> stamps;
+  record.samples = mergeEqualStamps(path, raw, options.joints.channelCount(), &stamps);
+  if (options.imu.any()) alignBagImu(path, options, imu_msgs, stamps, record);
   if (!truth_msgs.empty()) record.ground_truth = *truth_msgs.back();
   return record;
 }
 
 BagReadOptions bagReadOptions(const EstimatorConfig& config) {
   BagReadOptions o;
+  o.imu = imuChannels(config.model_type->channelNames(), config.measurement.channels);
+  o.imu_max_gap = config.node.imu_max_gap;
   if (config.model_type->twoContacts()) return o;
   o.joints = suspensionJoints(*config.model_type, config.node.joint_names);
   o.contacts = config.model_type->contactNames();
@@ -364,10 +417,20 @@ void writeBag(const std::string& path, const BagContents& c) {
       }
     };
     std::vector<double> row(c.contacts.size());
+    // IMU messages go in before the road and samples of later stamps.
+    std::size_t i = 0;
+    const auto imuUpTo = [&](const ros::Time& stamp) {
+      for (; i < c.imu_samples.size(); ++i) {
+        const ros::Time at = stampAt(c.origin, c.imu_samples[i].time);
+        if (at > stamp) break;
+        bag.write(c.imu_topic, at, imuFromMeasurement(c.imu_samples[i], at, c.imu, c.imu_variances));
+      }
+    };
     while (r < road_t.size() || s < c.samples.size()) {
       const bool road_next =
           s >= c.samples.size() || (r < road_t.size() && road_t[r] <= c.samples[s].time);
       truthsUpTo(stampAt(c.origin, road_next ? road_t[r] : c.samples[s].time));
+      imuUpTo(stampAt(c.origin, road_next ? road_t[r] : c.samples[s].time));
       if (road_next) {
         const ros::Time stamp = stampAt(c.origin, road_t[r]);
         if (contacts) {
@@ -386,6 +449,7 @@ void writeBag(const std::string& path, const BagContents& c) {
         ++s;
       }
     }
+    imuUpTo(ros::TIME_MAX);
     truthsUpTo(ros::TIME_MAX);
     bag.close();
   } catch (const BagError&) {

@@ -2,6 +2,9 @@
 // pc_ekf_ros, not of the ROS-free pc_ekf_io):
 //   road/profile             pc_ekf/RoadProfile       road heights under the tyres
 //   suspension/joint_states  sensor_msgs/JointState   the samples (u = position, v = velocity)
+//   imu/data                 sensor_msgs/Imu          body IMU (when measurement.channels
+//                                                     select IMU channels), aligned to the
+//                                                     samples by alignImuRecord (imu_alignment.h)
 //   ground_truth             pc_ekf/ParameterEstimate true values (synthesize_bag only)
 // Topics match on their suffix, so a leading namespace (/car1/road/profile)
 // is accepted. Times are header stamps; t = 0 is the stamp of the first
@@ -34,6 +37,7 @@ constexpr const char* kRoadTopic = "road/profile";
 constexpr const char* kRoadHeightsTopic = "road/heights";
 constexpr const char* kJointStatesTopic = "suspension/joint_states";
 constexpr const char* kGroundTruthTopic = "ground_truth";
+constexpr const char* kImuTopic = "imu/data";
 
 // True when `topic` is `suffix`, "/" + suffix, or ends in "/" + suffix.
 bool topicMatches(const std::string& topic, const std::string& suffix);
@@ -48,6 +52,10 @@ struct BagReadOptions {
   std::string road_heights_topic = kRoadHeightsTopic;
   std::string joint_states_topic = kJointStatesTopic;
   std::string ground_truth_topic = kGroundTruthTopic;
+  // IMU channels to read from imu_topic (none: the topic is not read).
+  ImuChannels imu;
+  std::string imu_topic = kImuTopic;
+  double imu_max_gap = 0.1;  // s (node.imu_max_gap)
 };
 
 struct BagRecord {
@@ -63,6 +71,11 @@ struct BagRecord {
   std::vector<std::string> warnings;
   int skipped_elements = 0;
   int empty_samples = 0;
+  // IMU (options.imu selected): the topic read ("" = none in the bag), its
+  // messages, those that gave no usable channel, and how the samples aligned.
+  std::string imu_topic;
+  int imu_messages = 0, imu_empty = 0, imu_problems = 0;
+  ImuAlignmentCounts imu;
 };
 
 // Reads and validates a bag. Throws BagError (naming the file) for a missing,
@@ -96,6 +109,14 @@ struct BagContents {
   std::string road_topic = kRoadTopic;  // full topic names as written
   std::string joint_states_topic = kJointStatesTopic;
   std::string ground_truth_topic = kGroundTruthTopic;
+  // Body IMU messages (sensor_msgs/Imu) at the times of imu_samples (their
+  // IMU channels; stamps distinct from each other), merged with the rest by
+  // stamp. `imu_variances` (one per model channel, may be empty) fill the
+  // covariances' diagonals, else they are all zero ("unknown").
+  MeasurementSeries imu_samples;
+  ImuChannels imu;
+  std::vector<double> imu_variances;
+  std::string imu_topic = kImuTopic;
 };
 
 // Writes (overwrites) an uncompressed bag. Throws BagError naming the file.

@@ -35,6 +35,9 @@ EstimatorDiagnostics::EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle p
   updater_.add("filter health", this, &EstimatorDiagnostics::reportHealth);
   updater_.add("checkpoints and master", this, &EstimatorDiagnostics::reportUpkeep);
   updater_.add("sensitivity", this, &EstimatorDiagnostics::reportSensitivity);
+  if (imuChannels(config.model_type->channelNames(), config.measurement.channels).any()) {
+    updater_.add("imu", this, &EstimatorDiagnostics::reportImu);
+  }
 }
 
 void EstimatorDiagnostics::setRunState(const std::string& road_mode, const std::string& origin,

@@ -12,6 +12,7 @@
 #include "pc_ekf/filter/health.h"
 #include "pc_ekf/io/start_sensitivity.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/ros/imu_input.h"
 
 namespace pc_ekf {
 
@@ -96,6 +97,11 @@ class EstimatorDiagnostics {
                    std::size_t road_samples);
   // Shown under "sensitivity": each uncertain parameter's largest total Sobol index.
   void setSensitivity(const StartSensitivity& s) { sensitivity_ = s; }
+  // imu/data (shown under "imu" when measurement.channels select IMU channels).
+  void setImu(const ImuInputStats& stats, double now) {
+    imu_ = stats;
+    imu_now_ = now;
+  }
   void publish() { updater_.force_update(); }
   double period() { return updater_.getPeriod(); }
 
@@ -105,6 +111,7 @@ class EstimatorDiagnostics {
   void reportHealth(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportUpkeep(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportSensitivity(diagnostic_updater::DiagnosticStatusWrapper& s);
+  void reportImu(diagnostic_updater::DiagnosticStatusWrapper& s);  // estimator_diagnostics_imu.cpp
 
   diagnostic_updater::Updater updater_;
   EstimatorConfig config_;
@@ -120,6 +127,10 @@ class EstimatorDiagnostics {
   std::string origin_;
   std::size_t pending_ = 0, road_samples_ = 0;
   StartSensitivity sensitivity_;
+  ImuInputStats imu_;
+  double imu_now_ = 0.0;
+  std::uint64_t imu_reported_received_ = 0;
+  ros::WallTime imu_reported_at_;
 };
 
 }  // namespace pc_ekf

@@ -115,6 +115,12 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   }
   road_heights_sub_ =
       nh_.subscribe("road/heights", queue, &EstimatorRos::onRoadHeights, this, hints);
+  if (imuChannels(config_.model_type->channelNames(), config_.measurement.channels).any()) {
+    imu_ = std::make_unique<ImuInput>(config_);
+    imu_sub_ = nh_.subscribe("imu/data", queue, &EstimatorRos::onImu, this, hints);
+    ROS_INFO("%s: IMU channels from %s (aligned to the joint_states stamps)", name_.c_str(),
+             nh_.resolveName("imu/data").c_str());
+  }
   reset_srv_ = pnh_.advertiseService("reset", &EstimatorRos::onReset, this);
   batch_srv_ = pnh_.advertiseService("estimate_batch", &EstimatorRos::onEstimateBatch, this);
 
@@ -326,18 +332,52 @@ void EstimatorRos::onJointState(const sensor_msgs::JointState::ConstPtr& msg) {
     rejectSample("no_observed_channel", "no finite position or velocity of the suspension joints");
     return;
   }
-  StampVerdict v = timeline_.addSample(msg->header.stamp, conv.measurement, now);
+  if (imu_) {
+    imu_->addSample(msg->header.stamp, conv.measurement, now);
+    releaseImu(now);
+    return;
+  }
+  addSample(msg->header.stamp, conv.measurement, now);
+}
+
+void EstimatorRos::addSample(const ros::Time& stamp, const Measurement& m, double arrival) {
+  EstimatorCounters& counters = diagnostics_.counters();
+  StampVerdict v = timeline_.addSample(stamp, m, arrival);
   if (v == StampVerdict::kTimeJump && config_.node.reset_on_time_jump) {
     ROS_WARN("%s: joint_states stamp jumped back in time: reset to the prior", name_.c_str());
     ++counters.time_jump_resets;
     startRun();
-    v = timeline_.addSample(msg->header.stamp, conv.measurement, now);
+    v = timeline_.addSample(stamp, m, arrival);
   }
   if (v != StampVerdict::kAccepted) {
-    rejectSample(toString(v), "stamp " + std::to_string(msg->header.stamp.toSec()));
+    rejectSample(toString(v), "stamp " + std::to_string(stamp.toSec()));
     return;
   }
   processReleased();
+}
+
+void EstimatorRos::onImu(const sensor_msgs::Imu::ConstPtr& msg) {
+  const double now = steadySeconds();
+  const std::string problem = imu_->addImu(*msg, now);
+  if (!problem.empty()) {
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: imu/data stamped %.9f: %s", name_.c_str(),
+                      msg->header.stamp.toSec(), problem.c_str());
+  }
+  releaseImu(now);
+}
+
+void EstimatorRos::releaseImu(double now) {
+  const std::uint64_t expired = imu_->stats().samples_without_imu.count("wait_expired")
+                                    ? imu_->stats().samples_without_imu.at("wait_expired")
+                                    : 0;
+  for (const ImuReleased& s : imu_->release(now)) addSample(s.stamp, s.measurement, s.arrival);
+  const auto& without = imu_->stats().samples_without_imu;
+  if (without.count("wait_expired") && without.at("wait_expired") > expired) {
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "%s: no imu/data message reached a joint_states stamp within %.3f s "
+                      "(node.road_wait_timeout): samples go on without IMU channels",
+                      name_.c_str(), config_.node.road_wait_timeout);
+  }
 }
 
 void EstimatorRos::onRoad(const RoadProfile::ConstPtr& msg) {
@@ -384,11 +424,13 @@ void EstimatorRos::addRoad(const ros::Time& stamp, const std::vector<double>& he
 }
 
 void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
+  if (imu_ && imu_->waiting() > 0) releaseImu(steadySeconds());
   if (timeline_.pendingCount() > 0) processReleased();
 }
 
 void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
   updateRunState();
+  if (imu_) diagnostics_.setImu(imu_->stats(), steadySeconds());
   {
     NodeBacklog& b = diagnostics_.backlog();
     std::lock_guard<std::mutex> lock(inbox_mutex_);
@@ -495,6 +537,7 @@ void EstimatorRos::process(const ReleasedSample& sample) {
 
 bool EstimatorRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   const int samples = run_ ? run_->samples() : 0;
+  if (imu_) imu_->reset();
   startRun();
   ++diagnostics_.counters().resets;
   diagnostics_.last() = LastUpdate{};

@@ -30,6 +30,7 @@
 #include "pc_ekf/ros/estimator_diagnostics.h"
 #include "pc_ekf/ros/estimator_run.h"
 #include "pc_ekf/ros/estimator_timeline.h"
+#include "pc_ekf/ros/imu_input.h"
 #include "pc_ekf/ros/master_watch.h"
 #include "pc_ekf/ros/message_conversion.h"
 
@@ -55,6 +56,11 @@ class EstimatorRos {
   // Main thread: the oldest queued joint_states message.
   void processNext();
   void onJointState(const sensor_msgs::JointState::ConstPtr& msg);
+  // A converted sample to the timeline (after its IMU channels, if any).
+  void addSample(const ros::Time& stamp, const Measurement& m, double arrival);
+  // imu/data (docs/nodes.md "Clocks"): the samples the IMU alignment releases.
+  void onImu(const sensor_msgs::Imu::ConstPtr& msg);
+  void releaseImu(double now);
   void onRoad(const RoadProfile::ConstPtr& msg);
   void onRoadHeights(const RoadHeights::ConstPtr& msg);
   void addRoad(const ros::Time& stamp, const std::vector<double>& heights, const char* topic);
@@ -88,6 +94,7 @@ class EstimatorRos {
   std::shared_ptr<const PcPropagator> prior_propagator_;     // for the prior message
   std::shared_ptr<const ParameterPdfSampler> pdfs_;          // null: no parameter_pdf
   EstimatorTimeline timeline_;
+  std::unique_ptr<ImuInput> imu_;  // null: measurement.channels select no IMU channel
   std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
   std::unique_ptr<PdfWorker> pdf_worker_;  // null: no parameter_pdf
   EstimatorDiagnostics diagnostics_;
@@ -105,7 +112,7 @@ class EstimatorRos {
   ros::CallbackQueue receive_queue_;
   std::unique_ptr<ros::AsyncSpinner> receiver_;
 
-  ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_;
+  ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_, imu_sub_;
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;
   ros::ServiceServer reset_srv_, batch_srv_;
   ros::WallTimer wait_timer_, diagnostics_timer_;

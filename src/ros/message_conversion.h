@@ -9,6 +9,7 @@
 #include <pc_ekf/RoadHeights.h>
 #include <pc_ekf/RoadProfile.h>
 #include <ros/time.h>
+#include <sensor_msgs/Imu.h>
 #include <sensor_msgs/JointState.h>
 
 #include <Eigen/Dense>
@@ -16,6 +17,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/health.h"
+#include "pc_ekf/filter/imu_alignment.h"
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/predictive_check.h"
@@ -87,6 +89,52 @@ JointStateConversion measurementFromJointState(const sensor_msgs::JointState& ms
 // std::invalid_argument for a channel index outside 0..3 or a size mismatch.
 sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ros::Time& stamp,
                                                   const SuspensionJoints& joints = {});
+
+// ---- body IMU (sensor_msgs/Imu on imu/data, REP 145 raw) ----
+
+// The model channels an Imu message fills: linear_acceleration.y, .z ->
+// accel_y, accel_z; angular_velocity.x, .y -> gyro_x, gyro_y (-1: not
+// selected or not a channel of the model; accel_x from .x where a model has it).
+struct ImuChannels {
+  int accel_x = -1, accel_y = -1, accel_z = -1, gyro_x = -1, gyro_y = -1;
+  bool any() const {
+    return accel_x >= 0 || accel_y >= 0 || accel_z >= 0 || gyro_x >= 0 || gyro_y >= 0;
+  }
+};
+// The IMU channels of `channel_names` (the model's) that `selected`
+// (measurement.channels) selects.
+ImuChannels imuChannels(const std::vector<std::string>& channel_names,
+                        const std::vector<std::string>& selected);
+
+enum class ImuProblem {
+  kNonFinite,         // a used value NaN/Inf: that channel not observed
+  kNoData,            // covariance element 0 = -1: that field's channels not observed
+  kBadCovariance,     // a used diagonal entry NaN/Inf/negative: config noise used
+};
+const char* toString(ImuProblem p);
+
+struct ImuConversion {
+  ImuReading reading;  // stamp_ns = header stamp in ns
+  // Per field (linear_acceleration, angular_velocity): its covariance was all
+  // zero ("unknown"): the config's noise used.
+  int unknown_covariances = 0;
+  std::vector<std::string> problems;  // one line each
+  std::vector<ImuProblem> problem_kinds;
+  bool empty() const { return reading.channels.empty(); }
+};
+
+// Converts one Imu message. Covariances: the diagonal entry of each used
+// axis is the reading's variance; an all-zero matrix ("unknown") or a zero
+// entry gives NaN (the config's noise); element 0 = -1 ("no data") leaves
+// that field's channels out. Orientation is not used.
+ImuConversion readingFromImu(const sensor_msgs::Imu& msg, const ImuChannels& channels);
+
+// The inverse, for writing bags: the IMU channels of `m` at `stamp`;
+// unobserved fields NaN with covariance element 0 = -1; `variances` (one per
+// model channel, may be empty) fill the diagonal entries, else all zero.
+sensor_msgs::Imu imuFromMeasurement(const Measurement& m, const ros::Time& stamp,
+                                    const ImuChannels& channels,
+                                    const std::vector<double>& variances = {});
 
 // ---- road ----
 RoadProfile roadProfileMessage(const ros::Time& stamp, double left, double right);

@@ -1,10 +1,14 @@
 #include "pc_ekf/ros/replay_player.h"
 
+#include <optional>
+#include <vector>
+
 #include <ros/console.h>
 #include <ros/master.h>
 #include <ros/this_node.h>
 #include <rosbag/view.h>
 #include <rosgraph_msgs/Clock.h>
+#include <sensor_msgs/Imu.h>
 
 #include <algorithm>
 #include <iomanip>
@@ -53,6 +57,7 @@ BagReplayer::BagReplayer(ros::NodeHandle& nh, ReplayBag& bag, const ReplayOption
                      "' (" + bag_.topics().at(*gated).datatype + ") has no std_msgs/Header");
     }
     lossless_topic_ = *gated;
+    if (const auto imu = bag_.findTopic(kImuTopic)) imu_topic_ = *imu;
     handshake_ = std::make_unique<EstimateHandshake>(nh_, options_.estimate_topic);
   }
 }
@@ -140,6 +145,35 @@ bool BagReplayer::playOnce() {
   const ros::WallTime start = ros::WallTime::now();
   std::size_t index = 0;
   int next_progress = 25;
+  // IMU messages published ahead of their place (imu_topic_ with the
+  // handshake). Read into memory first: two views reading one bag at once
+  // are not safe.
+  std::vector<sensor_msgs::Imu::ConstPtr> imu_msgs;
+  if (handshake_ && !imu_topic_.empty()) {
+    rosbag::View imu_view(bag_.bag(), rosbag::TopicQuery(imu_topic_));
+    for (const rosbag::MessageInstance& imu : imu_view) {
+      const auto msg = imu.instantiate<sensor_msgs::Imu>();
+      if (!msg) {  // another definition: no look-ahead
+        imu_msgs.clear();
+        break;
+      }
+      imu_msgs.push_back(msg);
+    }
+  }
+  const bool look_ahead = !imu_msgs.empty();
+  std::size_t imu_ahead = 0, imu_seen = 0;
+  std::optional<ros::Time> imu_last;
+  const auto publishNextImu = [&] {
+    const sensor_msgs::Imu& imu = *imu_msgs[imu_ahead];
+    if (!imu_last || *imu_last < imu.header.stamp) imu_last = imu.header.stamp;
+    publishers_.at(imu_topic_).publish(imu);
+    ++counts_.per_topic[bag_.topics().at(imu_topic_).topic];
+    ++imu_ahead;
+  };
+  const auto publishImuThrough = [&](const ros::Time& stamp) {
+    while ((!imu_last || *imu_last < stamp) && imu_ahead < imu_msgs.size()) publishNextImu();
+  };
+  std::optional<ros::Time> awaited;  // the sample whose answer the next wait is for
   for (const rosbag::MessageInstance& m : view) {
     if (!ros::ok()) return false;
     if (options_.rate > 0.0 &&
@@ -151,9 +185,17 @@ bool BagReplayer::playOnce() {
       clock.clock = m.getTime();
       clock_.publish(clock);
     }
+    if (look_ahead && m.getTopic() == imu_topic_) {
+      // Published ahead already, or now in its place.
+      if (++imu_seen > imu_ahead && imu_ahead < imu_msgs.size()) publishNextImu();
+      ++index;
+      continue;
+    }
     if (handshake_ && m.getTopic() == lossless_topic_) {
+      if (awaited) publishImuThrough(*awaited);
       handshake_->waitForAnswer(options_.lossless_timeout);  // the previous sample's
-      handshake_->expect(headerStamp(m));
+      awaited = headerStamp(m);
+      handshake_->expect(*awaited);
     }
     publishers_.at(m.getTopic()).publish(m);
     ++counts_.per_topic[bag_.topics().at(m.getTopic()).topic];
@@ -164,6 +206,7 @@ bool BagReplayer::playOnce() {
       next_progress += 25;
     }
   }
+  if (awaited) publishImuThrough(*awaited);  // before finish() waits for the last answer
   ++counts_.passes;
   counts_.wall_seconds += (ros::WallTime::now() - start).toSec();
   return true;

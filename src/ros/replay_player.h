@@ -50,6 +50,10 @@ class BagReplayer {
   std::map<std::string, ros::Publisher> publishers_;  // by recorded topic
   ros::Publisher clock_;
   std::string lossless_topic_;  // recorded topic gated by the handshake ("" = none)
+  // imu/data in the bag (issue 29): with the handshake, a sample is answered
+  // only once an IMU message stamped at or after it arrived, so the IMU
+  // messages up to that one are published ahead before waiting.
+  std::string imu_topic_;
   std::unique_ptr<EstimateHandshake> handshake_;
   ReplayCounts counts_;
 };

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <string>
 
+#include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/ros/bag_io.h"
 #include "pc_ekf/io/estimation_setup.h"
@@ -21,10 +22,14 @@ namespace {
 const char* kUsage =
     "usage: synthesize_bag --config FILE.yaml --output FILE.bag [--seed N]\n"
     "                      [--road-rate HZ (1000)] [--start-time SEC (1000000000)]\n"
-    "                      [--csv FILE.csv]\n"
+    "                      [--csv FILE.csv] [--imu-rate HZ] [--imu-offset SEC (0)]\n"
     "Writes road/profile at HZ from t = 0 to the last sample, suspension/joint_states\n"
     "at the config's sample times and ground_truth, stamped START + t (with a\n"
-    "truth.schedule also one ground_truth per sample, at its stamp).\n";
+    "truth.schedule also one ground_truth per sample, at its stamp). When\n"
+    "measurement.channels select IMU channels, sensor_msgs/Imu on imu/data: at the\n"
+    "sample times, or with --imu-rate at IMU-OFFSET + k / HZ (k >= 0, t > 0) through\n"
+    "one IMU period past the last sample, simulated at those times (covariances all\n"
+    "zero: \"unknown\"). The values are the model's in measurement.zero's convention.\n";
 
 // Parses a finite double; false when the whole text is not one.
 bool parseDouble(const std::string& text, double* value) {
@@ -43,7 +48,8 @@ int main(int argc, char** argv) {
   using namespace pc_ekf;
   CommandLine args("synthesize_bag", kUsage);
   const int parsed = args.parse(
-      argc, argv, {"--config", "--output", "--seed", "--road-rate", "--start-time", "--csv"});
+      argc, argv, {"--config", "--output", "--seed", "--road-rate", "--start-time", "--csv", "--imu-rate",
+                 "--imu-offset"});
   if (parsed >= 0) return parsed;
   if (!args.has("--config")) return args.badInput(std::string("--config is required\n") + kUsage);
   if (!args.has("--output")) return args.badInput(std::string("--output is required\n") + kUsage);
@@ -58,6 +64,20 @@ int main(int argc, char** argv) {
                                      start_time <= 0.0 || start_time > 4.0e9)) {
     return args.badInput("--start-time '" + args["--start-time"] +
                     "' is not a time in (0, 4e9] s (ros::Time must stay positive)");
+  }
+
+  double imu_rate = 0.0, imu_offset = 0.0;
+  if (args.has("--imu-rate") &&
+      (!parseDouble(args["--imu-rate"], &imu_rate) || imu_rate <= 0.0 || imu_rate > 1e5)) {
+    return args.badInput("--imu-rate '" + args["--imu-rate"] + "' is not a rate in (0, 1e5] Hz");
+  }
+  if (args.has("--imu-offset") &&
+      (!parseDouble(args["--imu-offset"], &imu_offset) || std::abs(imu_offset) > 1.0)) {
+    return args.badInput("--imu-offset '" + args["--imu-offset"] +
+                         "' is not a time in [-1, 1] s");
+  }
+  if (args.has("--imu-offset") && !args.has("--imu-rate")) {
+    return args.badInput("--imu-offset needs --imu-rate (without it the IMU shares the samples' stamps)");
   }
 
   return args.run([&] {
@@ -93,6 +113,32 @@ int main(int argc, char** argv) {
       bag.joints = suspensionJoints(*config.model_type, config.node.joint_names);
     }
     bag.samples = samples;
+    bag.imu = imuChannels(config.model_type->channelNames(), config.measurement.channels);
+    if (bag.imu.any()) {
+      std::vector<int> imu, other;
+      for (int c : channelIndices(config)) {
+        const bool is_imu = c == bag.imu.accel_x || c == bag.imu.accel_y || c == bag.imu.accel_z ||
+                            c == bag.imu.gyro_x || c == bag.imu.gyro_y;
+        (is_imu ? imu : other).push_back(c);
+      }
+      bag.samples = onlyChannels(samples, other);
+      if (imu_rate <= 0.0) {
+        bag.imu_samples = onlyChannels(samples, imu);
+      } else {
+        const auto truth = truthModel(config, *model);
+        SyntheticDataSettings s = syntheticSettings(config, *truth, seed + 1);
+        s.times.clear();
+        const double period = 1.0 / imu_rate;
+        for (long k = 0;; ++k) {
+          const double t = imu_offset + static_cast<double>(k) * period;
+          if (t > t_last + period) break;
+          if (t > 0.0) s.times.push_back(t);
+        }
+        s.channels = imu;
+        s.timing = TimingImperfections{};
+        bag.imu_samples = synthesizeMeasurements(*truth, truthParameters(config, *model), s);
+      }
+    }
 
     const ParameterMapping mapping(*model, config.uncertain);
     const PolynomialBasis basis(mapping.germs(), config.pc_order, config.pc_truncation);
@@ -117,7 +163,9 @@ int main(int argc, char** argv) {
     }
     std::cerr << "synthesize_bag: wrote " << args["--output"] << " (" << samples.size()
               << " samples, " << count << " road messages at " << road_rate << " Hz over " << t_last
-              << " s, seed " << seed << ")\n";
+              << " s, seed " << seed;
+    if (!bag.imu_samples.empty()) std::cerr << ", " << bag.imu_samples.size() << " imu/data messages";
+    std::cerr << ")\n";
     return 0;
   });
 }
