@@ -21,7 +21,8 @@ struct RateSettings {
   // (its tail probability under the model; 0 = gate off).
   double gate_probability = 0.0;
   // Allowed fractions of damped updates and of samples with support mass
-  // above the limit (no clean null rate: 1 - confidence; docs/method.md §5.9).
+  // above the limit (no clean null rate; rateSettings: 1 - confidence and
+  // 0.1, docs/method.md §5.9).
   double damp_fraction = 0.01;
   double support_fraction = 0.01;
   double reopen_rate = 1.0 / 60.0;  // per s: 1 / health.reopen_interval (load changes)
