@@ -24,9 +24,7 @@ RateSettings rateSettings(const HealthSettings& health, double innovation_gate) 
   r.window = health.rate_window;
   r.gate_probability = innovation_gate;
   r.damp_fraction = 1.0 - health.nis_confidence;
-  // Measured allowance: an order-2 expansion of a parameter the data barely
-  // inform (a tolerance) spills past its support on some samples under the
-  // exact model (7 of 100 on the full car's own vehicle, 9 tolerances).
+  // Allowance of the support rate (reported, a warning only: SafeguardRates::flagged).
   r.support_fraction = 0.1;
   r.reopen_rate = 1.0 / health.reopen_interval;
   return r;

@@ -87,8 +87,8 @@ std::vector<std::string> SafeguardRates::warnings() const {
   describe(w, "damping rate beyond its bound: updates damped", damped, false);
   describe(w, "re-open rate beyond its bound (more than load changes explain): re-opens", reopened,
            true);
-  describe(w, "support rate beyond its bound: samples with PDF mass outside the support", support,
-           false);
+  describe(w, "support rate beyond its allowance (warning only): samples with PDF mass outside the support",
+           support, false);
   return w;
 }
 

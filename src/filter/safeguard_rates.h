@@ -46,9 +46,10 @@ struct SafeguardRate {
 struct SafeguardRates {
   bool available = false;  // false: no sample yet (or a method without these safeguards)
   SafeguardRate gated, damped, reopened, support;
-  bool flagged() const {
-    return gated.flagged() || damped.flagged() || reopened.flagged() || support.flagged();
-  }
+  // Drives health: the gate, damping and re-open rates. The support rate is
+  // reported (warning only): under PC truncation an honest, covered estimate
+  // spills past the support on up to 59 % of its samples (docs/method.md §5.9).
+  bool flagged() const { return gated.flagged() || damped.flagged() || reopened.flagged(); }
   std::vector<std::string> warnings() const;
 };
 

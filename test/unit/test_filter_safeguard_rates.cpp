@@ -93,6 +93,20 @@ TEST(SafeguardRateMonitor, DampedUpdatesAgainstTheirBinomialBound) {
   EXPECT_FALSE(r.flagged());
 }
 
+TEST(SafeguardRateMonitor, TheSupportRateIsAWarningOnly) {
+  // Three of ten samples with mass outside the support (allowance 1 %): the
+  // rate is flagged and warned about, health is not (docs/method.md §5.9).
+  SafeguardRateMonitor m(rates(0.0));
+  m.reset(0.0);
+  SafeguardRates r;
+  for (int i = 1; i <= 10; ++i) r = m.add(0.1 * i, false, false, false, i <= 3 ? 1 : 0);
+  EXPECT_EQ(r.support.run.count, 3);
+  EXPECT_TRUE(r.support.flagged());
+  EXPECT_FALSE(r.flagged());
+  ASSERT_EQ(r.warnings().size(), 1u);
+  EXPECT_NE(r.warnings()[0].find("warning only"), std::string::npos);
+}
+
 TEST(SafeguardRateMonitor, OneGatedSampleIsBeyondAOneInAMillionGate) {
   SafeguardRateMonitor m(rates(1e-6));
   m.reset(0.0);
