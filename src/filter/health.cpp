@@ -18,6 +18,18 @@ double chiSquareQuantile(double probability, double dof) {
   return 2.0 * gamma.inverseCdf(probability);
 }
 
+RateSettings rateSettings(const HealthSettings& health, double innovation_gate) {
+  RateSettings r;
+  r.confidence = health.nis_confidence;
+  r.window = health.rate_window;
+  r.gate_probability = innovation_gate;
+  r.damp_fraction = 1.0 - health.nis_confidence;
+  // Allowance of the support rate (reported, a warning only: SafeguardRates::flagged).
+  r.support_fraction = 0.1;
+  r.reopen_rate = 1.0 / health.reopen_interval;
+  return r;
+}
+
 std::vector<std::string> HealthStatus::warnings() const {
   std::vector<std::string> w;
   std::ostringstream o;
@@ -35,6 +47,7 @@ std::vector<std::string> HealthStatus::warnings() const {
                 "(model error, or a parameter that should be declared uncertain)");
   }
   if (reopened) w.push_back("uncertainty re-opened after a persistent NIS violation");
+  for (const std::string& r : rates.warnings()) w.push_back(r);
   if (loo_exceeded) {
     o.str("");
     o << "projection leave-one-out error " << loo_error.maxCoeff()

@@ -13,6 +13,7 @@
 
 #include "pc_ekf/filter/kalman_update.h"
 #include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/filter/safeguard_rates.h"
 
 namespace pc_ekf {
 
@@ -29,6 +30,10 @@ struct HealthSettings {
   // Relative leave-one-out error of the forecast's projection above which a
   // channel is flagged (warning: the expansion misses part of the response).
   double loo_warning = 0.1;
+  // The safeguards' rates (SafeguardRates, docs/method.md §5.9): the window
+  // in s, and the expected time between load changes (re-opens) in s.
+  double rate_window = 10.0;
+  double reopen_interval = 60.0;
 };
 
 struct HealthStatus {
@@ -48,11 +53,19 @@ struct HealthStatus {
   bool reopened = false;  // uncertainty re-opened after a persistent violation
   Eigen::VectorXd loo_error;  // per channel (ForecastReport::loo_error; empty: unavailable)
   bool loo_exceeded = false;  // some channel above loo_warning (warning only)
+  // One-step: the safeguards' rates up to this sample (window and run); a
+  // rate beyond its bound drives health.
+  SafeguardRates rates;
   bool healthy() const {
-    return !non_finite && !forecast_failed && !nis_window_outside && !damped && !reopened;
+    return !non_finite && !forecast_failed && !nis_window_outside && !damped && !reopened &&
+           !rates.flagged();
   }
   std::vector<std::string> warnings() const;
 };
+
+// The rate checks' settings from the health settings and the gate's tail
+// probability (docs/method.md §5.9).
+RateSettings rateSettings(const HealthSettings& health, double innovation_gate);
 
 // Quantile of the chi-square distribution with `dof` degrees of freedom.
 double chiSquareQuantile(double probability, double dof);

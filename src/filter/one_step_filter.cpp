@@ -110,6 +110,7 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
     : propagator_(std::move(propagator)),
       settings_(settings),
       health_(*propagator_, settings.health),
+      rates_(rateSettings(settings.health, settings.innovation_gate)),
       x_(propagator_->priorState()) {
   const int n = propagator_->parameterCount();
   lower_.resize(n);
@@ -171,6 +172,7 @@ void OneStepFilter::reset() {
   rejected_ = 0;
   violations_ = 0;
   health_.reset();
+  rates_.reset(0.0);
   startRelinearization();
 }
 
@@ -183,6 +185,7 @@ void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) 
   samples_ = samples;
   violations_ = 0;
   health_.reset();
+  if (rates_.samples() == 0) rates_.reset(time);  // a fresh filter: the run starts here
   endRelinearization();
 }
 
@@ -278,6 +281,7 @@ StepResult OneStepFilter::swapInRerun(const StepResult& live) {
   rejected_ = f.rejected_;
   violations_ = f.violations_;
   health_ = f.health_;
+  rates_ = f.rates_;
   StepResult last = rerun_->last();
   const bool reopened = rerun_->reopened();
   rerun_.reset();
@@ -302,6 +306,7 @@ StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi&
   rejected_ = 0;
   violations_ = 0;
   health_.reset();
+  rates_.reset(0.0);
   StepResult last;
   bool reopened = false;
   for (const Measurement& m : kept_) {  // step() leaves kept_ alone
@@ -349,6 +354,8 @@ StepResult OneStepFilter::step(const Measurement& m) {
   r.stddev = pcStddev(r.coefficients);
   // The window sees a gated sample's NIS clipped at the gate: a persistent
   // misfit still breaks the window, one wild outlier does not dominate it.
+  // The gated sample itself counts in the gate's rate (rates_, below), which
+  // fails health beyond the gate's expected fraction (docs/method.md §5.9).
   UpdateDiagnostics seen = r.update;
   if (r.gated) seen.nis = std::min(seen.nis, gateBound(r.update.channels));
   if (r.rolled_back) seen.finite = false;
@@ -367,6 +374,8 @@ StepResult OneStepFilter::step(const Measurement& m) {
     r.reopened = true;
     r.health.reopened = true;
   }
+  const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
+  r.health.rates = rates_.add(r.time, r.gated, r.health.damped, r.reopened, support);
   return r;
 }
 

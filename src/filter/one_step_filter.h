@@ -93,6 +93,7 @@ class OneStepFilter {
   std::shared_ptr<const PcPropagator> propagator_;
   OneStepSettings settings_;
   HealthMonitor health_;
+  SafeguardRateMonitor rates_;  // the safeguards' rates since the prior (docs/method.md §5.9)
   // Gate threshold for `dof` channels (cached: quantiles are iterative).
   double gateBound(int dof);
   void safeguard(StepResult& r);

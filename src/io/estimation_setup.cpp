@@ -273,6 +273,8 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
   s.health.nis_confidence = c.health.nis_confidence;
   s.health.seed = c.pdf.seed;
   s.health.loo_warning = c.collocation.loo_warning;
+  s.health.rate_window = c.health.rate_window;
+  s.health.reopen_interval = c.health.reopen_interval;
   s.innovation_gate = c.health.innovation_gate;
   s.support = c.safeguards.support;
   s.drift = Eigen::Map<const Eigen::VectorXd>(c.safeguards.drift.data(), c.safeguards.drift.size());

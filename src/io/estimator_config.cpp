@@ -279,6 +279,8 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   h.number("coherence_threshold", c.health.coherence_threshold, 0.0, kInf, true);
   h.number("innovation_gate", c.health.innovation_gate, 0.0, 0.5);
   c.health.predictive_check = readFlag(h, "predictive_check", c.health.predictive_check);
+  h.number("rate_window", c.health.rate_window, 0.0, kInf, true);
+  h.number("reopen_interval", c.health.reopen_interval, 0.0, kInf, true);
   h.finish();
 
   YamlMapReader d = root.map("pdf");

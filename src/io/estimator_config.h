@@ -145,6 +145,10 @@ struct HealthConfig {
   double coherence_threshold = 3.0;
   double innovation_gate = 0.0;  // one-step: tail probability of the NIS gate (0 = off)
   bool predictive_check = true;  // batch methods: posterior-predictive check drives health
+  // One-step: the safeguards' rates (docs/method.md §5.9) over the last
+  // rate_window s and over the run; re-opens expected once per reopen_interval s.
+  double rate_window = 10.0;
+  double reopen_interval = 60.0;
 };
 
 // Behaviour on data the model does not explain (filter.support, .drift, .reopen).

@@ -110,10 +110,9 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   const PdfSamplerFuture pdf_sampler = startPdfSampler(
       c, PolynomialBasis(ParameterMapping(*model, c.uncertain).germs(), c.pc_order, c.pc_truncation));
   const std::shared_ptr<const PcPropagator> prop = makePropagator(c, model);
-  // The mass outside the support feeds nothing but the last sample's
-  // warnings here: assessed for that sample only.
-  OneStepSettings settings = makeOneStepSettings(c);
-  settings.health.support_every_sample = false;
+  // The mass outside the support is assessed at every sample: its rate
+  // drives health (docs/method.md §5.9). The coherence filter does without.
+  const OneStepSettings settings = makeOneStepSettings(c);
   CoherenceFuture coherence = startCoherenceFilter(c, series, *prop, settings);
   OneStepFilter filter(prop, settings);
   StepResult last;
@@ -131,8 +130,11 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
     nonfinite = nonfinite || last.health.forecast_failed;
     r->damped_updates += last.damping < 1.0;
     r->reopened += last.reopened;
+    const SafeguardRates& rates = last.health.rates;
+    r->rate_window_violations += rates.gated.window.flagged || rates.damped.window.flagged ||
+                                 rates.reopened.window.flagged || rates.support.window.flagged;
   }
-  filter.assessSupport(&last);
+  r->safeguard_rates = last.health.rates;
   r->rejected_samples = filter.rejected();
   r->relinearized = last.restarts;
   // The leading channels the model gives as built (ForecastReport::loo_error).

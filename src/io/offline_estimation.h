@@ -14,6 +14,7 @@
 #include "pc_ekf/filter/pc_propagator.h"
 #include "pc_ekf/filter/predictive_check.h"
 #include "pc_ekf/filter/prior_sensitivity.h"
+#include "pc_ekf/filter/safeguard_rates.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/pc/pc_statistics.h"
@@ -65,6 +66,11 @@ struct OfflineResult {
   int damped_updates = 0;       // updates scaled down by the support rule
   int reopened = 0;             // one-step: times the uncertainty was re-opened
   int relinearized = 0;         // one-step: re-linearisations (filter.relinearize)
+  // One-step: the safeguards' rates at the last sample (window and run,
+  // docs/method.md §5.9; drive health), and the samples at which a rate's
+  // window check was flagged (informational, like nis_window_violations).
+  SafeguardRates safeguard_rates;
+  int rate_window_violations = 0;
   double band_nested_fraction = 1.0;
   long integrations = 0;  // point- or member-intervals, or full simulations (grid)
   double wall_seconds = 0.0;

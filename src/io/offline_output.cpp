@@ -21,6 +21,24 @@ namespace {
 // Keys in the order of the documented output.
 using Json = nlohmann::ordered_json;
 
+// One safeguard's rate checks (docs/method.md §5.9).
+Json rateJson(const SafeguardRate& r, bool per_second) {
+  const auto span = [per_second](const RateCheck& c) {
+    Json j;
+    j["count"] = c.count;
+    if (per_second) {
+      j["exposure_s"] = c.exposure;
+    } else {
+      j["trials"] = c.trials;
+    }
+    j["expected"] = c.expected;
+    j["p"] = c.tail;
+    j["flagged"] = c.flagged;
+    return j;
+  };
+  return {{"window", span(r.window)}, {"run", span(r.run)}, {"flagged", r.flagged()}};
+}
+
 Json numberList(const Eigen::VectorXd& v) {
   Json list = Json::array();
   for (Eigen::Index i = 0; i < v.size(); ++i) list.push_back(v[i]);
@@ -133,6 +151,15 @@ std::string toJson(const OfflineResult& r) {
     j["modes"] = r.modes;
     j["border_mass"] = r.border_mass;
   }
+  // Appended (issue 33): the safeguards' rates at the last sample (one-step).
+  const SafeguardRates& s = r.safeguard_rates;
+  j["safeguard_rates"] = {{"available", s.available},
+                          {"flagged", s.flagged()},
+                          {"window_violations", r.rate_window_violations},
+                          {"gated", rateJson(s.gated, false)},
+                          {"damped", rateJson(s.damped, false)},
+                          {"reopened", rateJson(s.reopened, true)},
+                          {"support", rateJson(s.support, false)}};
   // Bytes that are not UTF-8 (a warning quoting a file) become U+FFFD
   // instead of an exception.
   return j.dump(1, ' ', false, Json::error_handler_t::replace) + "\n";

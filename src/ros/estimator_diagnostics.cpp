@@ -134,6 +134,11 @@ void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrap
   const HealthStatus& h = u.health;
   if (u.non_finite || h.non_finite || h.forecast_failed) {
     s.summary(DiagnosticStatus::ERROR, "filter diverged: " + joined(u.warnings));
+  } else if (h.rates.flagged()) {
+    // The safeguards act more often than the model allows (docs/method.md
+    // §5.9): the data are not explained, whatever the windowed NIS says.
+    s.summary(DiagnosticStatus::ERROR,
+              "safeguards beyond their expected rates: " + joined(h.rates.warnings()));
   } else if (!u.healthy || h.support_exceeded || h.loo_exceeded) {
     s.summary(DiagnosticStatus::WARN, joined(u.warnings));
   } else {
@@ -152,6 +157,30 @@ void EstimatorDiagnostics::reportHealth(diagnostic_updater::DiagnosticStatusWrap
   s.add("forecast failed", h.forecast_failed);
   s.add("band nested (informational)", h.band_nested);
   s.add("coherence flagged", u.coherence_flagged);
+  // The safeguards' rates (docs/method.md §5.9): window = last health.rate_window s.
+  const SafeguardRates& r = h.rates;
+  const std::pair<const char*, const SafeguardRate*> rates[] = {{"gated samples", &r.gated},
+                                                               {"damped updates", &r.damped},
+                                                               {"re-opens", &r.reopened},
+                                                               {"support exceeded", &r.support}};
+  for (const auto& [name, rate] : rates) {
+    const std::string n = name;
+    if (rate == &r.reopened) {
+      s.add(n + " per s (run)", rate->run.exposure > 0.0 ? rate->run.count / rate->run.exposure : 0.0);
+    } else {
+      s.add(n + " fraction (run)", rate->run.trials > 0
+                                        ? static_cast<double>(rate->run.count) / rate->run.trials
+                                        : 0.0);
+    }
+    s.add(n + " (window / expected)", std::to_string(rate->window.count) + " / " +
+                                          std::to_string(rate->window.expected));
+    s.add(n + " (run / expected)",
+          std::to_string(rate->run.count) + " / " + std::to_string(rate->run.expected));
+    s.add(n + " P(window, run)",
+          std::to_string(rate->window.tail) + ", " + std::to_string(rate->run.tail));
+    s.add(n + " rate flagged", rate->flagged());
+  }
+  s.add("safeguard rates flagged", r.flagged());
   const std::vector<std::string>& channels = config_.model_type->channelNames();
   for (Eigen::Index i = 0; i < h.loo_error.size(); ++i) {
     const std::string name =

@@ -289,6 +289,32 @@ void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients
   if (coefficients.size() > 0) msg.term_count = static_cast<std::uint32_t>(cols);
 }
 
+void setRates(ParameterEstimate& msg, const SafeguardRates& r, double window) {
+  msg.rate_window = window;
+  msg.rate_names.clear();
+  msg.rate_window_count.clear();
+  msg.rate_window_expected.clear();
+  msg.rate_window_tail.clear();
+  msg.rate_run_count.clear();
+  msg.rate_run_expected.clear();
+  msg.rate_run_tail.clear();
+  msg.rate_flagged.clear();
+  msg.rates_flagged = r.flagged();
+  if (!r.available) return;
+  const std::pair<const char*, const SafeguardRate*> rates[] = {
+      {"gated", &r.gated}, {"damped", &r.damped}, {"reopened", &r.reopened}, {"support", &r.support}};
+  for (const auto& [name, rate] : rates) {
+    msg.rate_names.push_back(name);
+    msg.rate_window_count.push_back(static_cast<std::uint32_t>(rate->window.count));
+    msg.rate_window_expected.push_back(rate->window.expected);
+    msg.rate_window_tail.push_back(rate->window.tail);
+    msg.rate_run_count.push_back(static_cast<std::uint32_t>(rate->run.count));
+    msg.rate_run_expected.push_back(rate->run.expected);
+    msg.rate_run_tail.push_back(rate->run.tail);
+    msg.rate_flagged.push_back(rate->flagged());
+  }
+}
+
 void setHealth(ParameterEstimate& msg, const HealthStatus& h, int nis_channels,
                const HealthSettings& settings) {
   msg.nis = h.nis;
@@ -310,6 +336,7 @@ void setHealth(ParameterEstimate& msg, const HealthStatus& h, int nis_channels,
   msg.loo_error = toStd(h.loo_error);
   msg.loo_warning = settings.loo_warning;
   msg.loo_exceeded = h.loo_exceeded;
+  setRates(msg, h.rates, settings.rate_window);
   msg.healthy = h.healthy() && !msg.coherence_flagged;
   msg.warnings = h.warnings();
   if (msg.coherence_flagged) msg.warnings.push_back(coherenceWarning(msg));

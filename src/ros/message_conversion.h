@@ -168,6 +168,8 @@ void setBasis(ParameterEstimate& msg, const PolynomialBasis& basis);
 // coefficients (parameters x S) row-major plus term_count; an empty matrix
 // clears them.
 void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients);
+// The safeguards' rates (docs/method.md §5.9; empty arrays when not available).
+void setRates(ParameterEstimate& msg, const SafeguardRates& rates, double window);
 // Health fields of docs/method.md §5 (also sets `healthy` and `warnings`, keeping a
 // coherence flag already set).
 void setHealth(ParameterEstimate& msg, const HealthStatus& health, int nis_channels,

@@ -213,7 +213,8 @@ TEST(RealVehicle, CalibratedVehicleFileNarrowsTheLoadAndStaysHonest) {
         alone.add(base, kLoads[l]);
         EXPECT_TRUE(r.covered && r.result.healthy)
             << toString(kMethods[m]) << " vehicle " << v << " load " << l << ": M "
-            << r.result.parameters[0].mean << " +- " << r.result.parameters[0].stddev;
+            << r.result.parameters[0].mean << " +- " << r.result.parameters[0].stddev << "; "
+            << (r.result.warnings.empty() ? std::string() : r.result.warnings.front());
         EXPECT_LT(r.result.parameters[0].stddev, base.result.parameters[0].stddev);
       }
     }
