@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "pc_ekf/model/input_noise.h"
 #include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
@@ -44,9 +45,10 @@ Eigen::Vector3d bodyAcceleration(const FullCarRoadFreeConstants& c,
   return q;
 }
 
+// gyro_before: the gyros' readings at the previous sample (x, y).
 void outputs(const FullCarRoadFreeConstants& c, const FullCarRoadFreeConstants::Point& p,
              const double* now, const double* before, bool before_at_rest, double dt,
-             double roll, double pitch, double* out) {
+             double roll, double pitch, const double* gyro_before, double* out) {
   double specific = 0.0, unused = 0.0;
   const Eigen::Vector3d a = bodyAcceleration(c, p, now, &specific);
   const Eigen::Vector3d b =
@@ -54,8 +56,8 @@ void outputs(const FullCarRoadFreeConstants& c, const FullCarRoadFreeConstants::
   const double r = p.roll_static + roll, pt = p.pitch_static + pitch;
   out[0] = specific * std::cos(pt) * std::sin(r) - p.rest_y;
   out[1] = specific * std::cos(pt) * std::cos(r) - p.rest_z;
-  out[2] = (before_at_rest ? 0.0 : before[kGyroX]) + 0.5 * (a[2] + b[2]) * dt;
-  out[3] = (before_at_rest ? 0.0 : before[kGyroY]) - 0.5 * (a[1] + b[1]) * dt;
+  out[2] = (before_at_rest ? 0.0 : gyro_before[0]) + 0.5 * (a[2] + b[2]) * dt;
+  out[3] = (before_at_rest ? 0.0 : gyro_before[1]) - 0.5 * (a[1] + b[1]) * dt;
 }
 
 class FullCarRoadFreeBatch : public ModelBatch {
@@ -86,10 +88,11 @@ class FullCarRoadFreeBatch : public ModelBatch {
     if (!at_rest) in_->at(t_before, before);
     const double roll = gyros ? in_->integral(kGyroX, t) : 0.0;
     const double pitch = gyros ? -in_->integral(kGyroY, t) : 0.0;
+    const double gyro_before[2] = {before[kGyroX], before[kGyroY]};
     double out[4];
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
       outputs(*c_, c_->points[static_cast<std::size_t>(q)], now, before, at_rest, t - t_before,
-              roll, pitch, out);
+              roll, pitch, gyro_before, out);
       for (int r = 0; r < 4; ++r) y(r, q) = out[r];
     }
   }
@@ -202,69 +205,38 @@ Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& 
   if (absolute.size() != n || relative.size() != n) {
     throw std::invalid_argument("inputNoiseVariance: one std per input");
   }
-  const std::vector<double>& t = inputs_->times();
   Eigen::VectorXd vehicle = nominal_vector_;
-  if (zero_ == ZeroConvention::kTare && mean_accel_z > 0.0) {
-    // The load the record weighs: the springs' mean force over mean accel_z.
+  if (zero_ == ZeroConvention::kTare) {  // the load the record weighs
     const auto c0 = constants(Eigen::MatrixXd(vehicle));
     const auto& p0 = c0->points.front();
-    double force = 0.0;
-    for (double tk : t) {
-      double in[10] = {};
-      inputs_->at(tk, in);
-      for (int i = 0; i < 4; ++i) {
-        const double x = p0.delta_ref[i] - in[i];
-        force += p0.k[i] * x + p0.k3[i] * x * x * x;
-      }
-    }
-    force /= static_cast<double>(t.size());
     const int body = fullCarDescription().parameters().at("body_mass");
     const int added = fullCarDescription().parameters().at("added_mass");
-    const double load = force / mean_accel_z - vehicle[body];
-    if (std::isfinite(load)) {
-      vehicle[added] = std::clamp(load, 0.0, 4.0 * std::max(vehicle[added], vehicle[body]));
-    }
+    const auto springs = [&](const double* in) {
+      double f = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        const double x = p0.delta_ref[i] - in[i];
+        f += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+      return f;
+    };
+    vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[body],
+                                 4.0 * std::max(vehicle[added], vehicle[body]), vehicle[added]);
   }
   const auto c = constants(Eigen::MatrixXd(vehicle));
   const auto& p = c->points.front();
-  const double duration = t.back();
+  const bool gyros = n > kGyroY;
+  const std::vector<int> integrated = gyros ? std::vector<int>{kGyroX, kGyroY} : std::vector<int>{};
+  const Eigen::VectorXd v = inputOutputVariance(
+      *inputs_, absolute, relative, integrated, 4,
+      [&](const double* now, const double* before, bool at_rest, double dt, const double* angle,
+          double* out) {
+        const double gyro_before[2] = {gyros ? before[kGyroX] : 0.0, gyros ? before[kGyroY] : 0.0};
+        outputs(*c, p, now, before, at_rest, dt, gyros ? angle[0] : 0.0, gyros ? -angle[1] : 0.0,
+                gyro_before, out);
+      });
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(12);
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    const double t_before = k == 0 ? 0.0 : t[k - 1], dt = t[k] - t_before;
-    double now0[10] = {}, before0[10] = {};
-    inputs_->at(t[k], now0);
-    if (k > 0) inputs_->at(t_before, before0);
-    for (int which = 0; which < 2 * n + 2; ++which) {
-      const bool attitude = which >= 2 * n;  // the gyros' integrals
-      const int i = which % n;
-      if (!attitude && which >= n && k == 0) continue;
-      const int gyro = attitude ? kGyroX + (which - 2 * n) : 0;
-      const double step =
-          attitude ? (n > kGyroY ? absolute[gyro] * std::sqrt(dt * duration) : 0.0)
-                   : std::hypot(absolute[i], relative[i] * (which < n ? now0[i] : before0[i]));
-      if (!(step > 0.0)) continue;
-      double plus[4], minus[4];
-      for (const int sign : {1, -1}) {
-        double now[10], before[10];
-        std::copy(now0, now0 + 10, now);
-        std::copy(before0, before0 + 10, before);
-        double roll = 0.0, pitch = 0.0;
-        if (attitude) {
-          (gyro == kGyroX ? roll : pitch) = sign * step;
-        } else if (which < n) {
-          now[i] += sign * step;
-        } else {
-          before[i] += sign * step;
-        }
-        outputs(*c, p, now, before, k == 0, dt, roll, pitch, sign > 0 ? plus : minus);
-      }
-      for (int r = 0; r < 4; ++r) {
-        const double d = 0.5 * (plus[r] - minus[r]);
-        variance[8 + r] += d * d;
-      }
-    }
-  }
-  return variance / static_cast<double>(t.size());
+  variance.tail(4) = v;
+  return variance;
 }
 
 }  // namespace pc_ekf

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "pc_ekf/model/input_noise.h"
 #include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
@@ -191,74 +192,38 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
   if (absolute.size() != n || relative.size() != n) {
     throw std::invalid_argument("inputNoiseVariance: one std per input");
   }
-  const std::vector<double>& t = inputs_->times();
   Eigen::VectorXd vehicle = nominal_vector_;
-  // With tare the record weighs the load: the springs' mean force over the
-  // mean specific force is m + M (the derivatives scale with 1 / (m + M)).
-  if (zero_ == ZeroConvention::kTare && mean_accel_z > 0.0) {
-    const std::unique_ptr<RoadFreeConstants> c0 = constants(Eigen::MatrixXd(vehicle));
+  // With tare the record weighs the load (the derivatives scale with 1 / (m + M)).
+  if (zero_ == ZeroConvention::kTare) {
+    const auto c0 = constants(Eigen::MatrixXd(vehicle));
     const RoadFreeConstants::Point& p0 = c0->points.front();
-    double force = 0.0;
-    for (double tk : t) {
-      double in[5] = {0, 0, 0, 0, 0};
-      inputs_->at(tk, in);
-      for (int i = 0; i < 2; ++i) {
-        const double x = p0.delta_ref[i] - in[kU1 + i];
-        force += p0.k[i] * x + p0.k3[i] * x * x * x;
-      }
-    }
-    force /= static_cast<double>(t.size());
     const int m = rollPlaneDescription().parameters().at("bar_mass");
     const int added = rollPlaneDescription().parameters().at("added_mass");
-    const double load = force / mean_accel_z - vehicle[m];
-    if (std::isfinite(load)) {
-      vehicle[added] = std::clamp(load, 0.0, 4.0 * std::max(vehicle[added], vehicle[m]));
-    }
+    const auto springs = [&](const double* in) {
+      double f = 0.0;
+      for (int i = 0; i < 2; ++i) {
+        const double x = p0.delta_ref[i] - in[kU1 + i];
+        f += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+      return f;
+    };
+    vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[m],
+                                 4.0 * std::max(vehicle[added], vehicle[m]), vehicle[added]);
   }
-  const std::unique_ptr<RoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
+  const auto c = constants(Eigen::MatrixXd(vehicle));
   const RoadFreeConstants::Point& p = c->points.front();
-  const double duration = t.back();
-  // The inputs now and at the previous sample, and the gyro's integral (its
-  // std at the record's end), perturbed one at a time by their noise at that
-  // sample (central differences), the noise of "now" and "before"
-  // independent. The mean over the samples of each output's variance.
+  const std::vector<int> integrated = n > kGyro ? std::vector<int>{kGyro} : std::vector<int>{};
+  const Eigen::VectorXd v = inputOutputVariance(
+      *inputs_, absolute, relative, integrated, 3,
+      [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
+          double* out) {
+        const double gyro_before = n > kGyro ? before[kGyro] : 0.0;
+        outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
+                gyro_before, out);
+      });
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(7);
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    const double t_before = k == 0 ? 0.0 : t[k - 1], dt = t[k] - t_before;
-    const double roll_std = n > kGyro ? absolute[kGyro] * std::sqrt(dt * duration) : 0.0;
-    double now0[5] = {0, 0, 0, 0, 0}, before0[5] = {0, 0, 0, 0, 0};
-    inputs_->at(t[k], now0);
-    if (k > 0) inputs_->at(t_before, before0);
-    for (int which = 0; which < 2 * n + 1; ++which) {
-      const bool is_roll = which == 2 * n;
-      const int i = which % n;
-      if (!is_roll && which >= n && k == 0) continue;  // before the first sample: at rest
-      const double reading = which < n ? now0[i] : before0[i];
-      const double step =
-          is_roll ? roll_std : std::hypot(absolute[i], relative[i] * reading);
-      if (!(step > 0.0)) continue;
-      double plus[3], minus[3];
-      for (const int sign : {1, -1}) {
-        double now[5], before[5];
-        std::copy(now0, now0 + 5, now);
-        std::copy(before0, before0 + 5, before);
-        double roll = 0.0;
-        if (is_roll) {
-          roll = sign * step;
-        } else if (which < n) {
-          now[i] += sign * step;
-        } else {
-          before[i] += sign * step;
-        }
-        outputs(*c, p, now, before, k == 0, dt, roll, 0.0, before[kGyro], sign > 0 ? plus : minus);
-      }
-      for (int r = 0; r < 3; ++r) {
-        const double d = 0.5 * (plus[r] - minus[r]);  // J * std
-        variance[4 + r] += d * d;
-      }
-    }
-  }
-  return variance / static_cast<double>(t.size());
+  variance.tail(3) = v;
+  return variance;
 }
 
 }  // namespace pc_ekf

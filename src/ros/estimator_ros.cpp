@@ -71,6 +71,12 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
       diagnostics_(nh, pnh, name, config_) {
   joints_ = suspensionJoints(*config_.model_type, config_.node.joint_names);
   // Built now so that a bad road file or collocation design is a start-up error.
+  if (config_.road.source == RoadSource::kNone) {
+    throw ConfigError(config_.source +
+                      ": key 'road.source': none (road-free) runs in estimate_offline, "
+                      "estimate_fleet and calibrate_vehicle; estimator_node needs a road "
+                      "(speed_bump, series, profile, course or topic) for now");
+  }
   if (config_.road.source == RoadSource::kTopic) {
     prior_propagator_ =
         makePropagator(config_, makeModel(config_, std::make_shared<SampledRoad>(

@@ -33,7 +33,11 @@ int main(int argc, char** argv) {
   }
   try {
     const EstimatorConfig c = loadConfigFile(argv[2], modelRegistryWithPlugins());
-    const auto model = makeModel(c, makeRoad(c));
+    // Road-free configs simulate the vehicle on the truth's road (truth.road).
+    const auto model = c.road.source == RoadSource::kNone
+                           ? c.model_type->build(*c.modelParameters(), makeTruthRoad(c),
+                                                 c.measurement.readings(c.model_type->description()))
+                           : makeModel(c, makeRoad(c));
     const auto truth = truthModel(c, *model);
     const SyntheticDataSettings s = syntheticSettings(c, *truth, c.truth.seed);
     const std::vector<double>& times = s.times;
@@ -58,16 +62,20 @@ int main(int argc, char** argv) {
       const auto z = simulateScheduled(*models[i], cases[i],
                                        i == 1 ? s.schedule : std::vector<ParameterChange>{}, times,
                                        c.integration);
-      const auto& channels = model->channelNames();
+      // The channels the model gives as built (IMU ones with readings as states).
+      const auto& specs = c.model_type->description().channels();
       std::printf("  %6s", "t [s]");
-      for (const auto& name : channels) {
-        const std::string head = name + (name[0] == 'v' ? " [m/s]" : " [m]");
-        std::printf(" %11s", head.c_str());
+      for (std::size_t ch = 0; ch < specs.size(); ++ch) {
+        if (!model->channelModelled(static_cast<int>(ch))) continue;
+        const std::string head = specs[ch].name + " [" + specs[ch].unit + "]";
+        std::printf(" %13s", head.c_str());
       }
       std::printf("\n");
       for (std::size_t k = 0; k < times.size(); ++k) {
         std::printf("  %6.2f", times[k]);
-        for (std::size_t ch = 0; ch < channels.size(); ++ch) std::printf(" %11.6f", z[k](ch, 0));
+        for (std::size_t ch = 0; ch < specs.size(); ++ch) {
+          if (model->channelModelled(static_cast<int>(ch))) std::printf(" %13.6f", z[k](ch, 0));
+        }
         std::printf("\n");
       }
     }

@@ -8,6 +8,7 @@
 #include <memory>
 #include <random>
 
+#include "pc_ekf/model/full_car_road_free.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/roll_plane_model.h"
 #include "pc_ekf/model/roll_plane_road_free.h"
@@ -143,6 +144,64 @@ TEST(RollPlaneRoadFree, ReproducesTheFullModelsImuFromItsSuspensionReadings) {
       EXPECT_NEAR(a(1, 0) - b(1, 0), b(1, 0) * 10.0 / (580.0 + 270.0), 0.02);
     }
   }
+}
+
+// The same for the full car: its corners' readings and gyros drive the
+// road-free body, whose accel_z and gyro increments match the full model's.
+TEST(FullCarRoadFree, ReproducesTheFullModelsImuFromItsSuspensionReadings) {
+  FullCarParameters p;
+  p.added_mass = 250.0;
+  p.added_mass_x = 0.9;
+  p.added_mass_y = 1.0;
+  p.imu_x = 0.3;
+  p.imu_y = -0.2;
+  Iso8608Settings s;
+  s.road_class = 'C';
+  const double wb = p.wheelbase();
+  auto road = std::make_shared<DrivenProfileRoad>(
+      std::make_shared<Iso8608Profile>(s), 10.0,
+      std::vector<std::pair<int, double>>{{0, 0.0}, {1, 0.0}, {0, wb}, {1, wb}});
+  const FullCarModel full(p, road, {ZeroConvention::kTare, true});
+  Eigen::MatrixXd params = p.toVector();
+  const auto batch = full.prepare(params);
+  Eigen::ArrayXXd y = batch->initialState();
+  IntegratorSettings is;
+  is.max_step = 2.5e-4;
+  std::vector<double> times;
+  std::vector<std::vector<double>> in(10);
+  std::vector<Eigen::Vector4d> imu;
+  double t = 0.0;
+  for (int k = 1; k <= 300; ++k) {
+    const double tk = k * 0.005;
+    integrate(full, *batch, t, tk, y, is);
+    t = tk;
+    times.push_back(tk);
+    for (int c = 0; c < 8; ++c) in[c].push_back(y(14 + c, 0));
+    in[8].push_back(y(24, 0));
+    in[9].push_back(y(25, 0));
+    imu.emplace_back(y(22, 0), y(23, 0), y(24, 0), y(25, 0));
+  }
+  auto inputs = std::make_shared<ReadingInputs>(
+      std::vector<std::string>{"u_fl", "u_fr", "u_rl", "u_rr", "v_fl", "v_fr", "v_rl", "v_rr",
+                               "gyro_x", "gyro_y"},
+      times, in);
+  const FullCarRoadFreeModel free(p, inputs, ZeroConvention::kTare);
+  EXPECT_EQ(free.stateSize(), 4);
+  EXPECT_TRUE(free.channelIsInput(7));
+  EXPECT_TRUE(free.channelModelled(11));
+  const auto fb = free.prepare(params);
+  double worst[4] = {0, 0, 0, 0}, motion = 0.0;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    Eigen::ArrayXXd r = fb->initialState();
+    integrate(free, *fb, 0.0, times[k], r, is);
+    for (int c = 0; c < 4; ++c) worst[c] = std::max(worst[c], std::abs(r(c, 0) - imu[k][c]));
+    motion = std::max(motion, std::abs(imu[k][1] - 9.81));
+  }
+  EXPECT_GT(motion, 0.3);
+  EXPECT_LT(worst[1], 3e-3 * motion);  // accel_z: cos of the dynamic attitude only
+  EXPECT_LT(worst[0], 5e-3);           // accel_y: the gyros' integrals by trapezoids
+  EXPECT_LT(worst[2], 2e-3);           // gyro increments: trapezoids over 5 ms
+  EXPECT_LT(worst[3], 2e-3);
 }
 
 // Errors in variables: the variance an output inherits from noisy inputs,

@@ -1,0 +1,38 @@
+// Errors in variables for road-free models (docs/method.md §4.10): the
+// variance a predicted reading inherits from the noise of the readings used
+// as inputs, to first order, averaged over a record.
+#pragma once
+
+#include <Eigen/Dense>
+#include <functional>
+#include <vector>
+
+#include "pc_ekf/model/reading_inputs.h"
+
+namespace pc_ekf {
+
+// The outputs of one parameter point at a sample: `now` and `before` the
+// inputs at the sample and at the previous one (`at_rest`: none before it),
+// dt between them, `attitude` the offsets of the integrated inputs (one per
+// entry of `integrated` in inputOutputVariance), written to `out`.
+using ReadingOutputs = std::function<void(const double* now, const double* before, bool at_rest,
+                                          double dt, const double* attitude, double* out)>;
+
+// For every sample of `inputs`: each input now and at the previous sample
+// perturbed by its noise there, hypot(absolute, relative * reading), and
+// each integrated input (e.g. a gyro's angle) by absolute * sqrt(dt * T) (T
+// the record's length), one at a time (central differences; the noise of
+// "now" and "before" independent). Returns, per output, the mean over the
+// samples of the sum of the squared changes.
+Eigen::VectorXd inputOutputVariance(const ReadingInputs& inputs, const Eigen::VectorXd& absolute,
+                                    const Eigen::VectorXd& relative,
+                                    const std::vector<int>& integrated, int outputs,
+                                    const ReadingOutputs& evaluate);
+
+// The load a tare record weighs: the springs' mean force (`spring_force` of
+// the inputs at a sample) over the record's mean accel_z, less the body
+// mass, clamped to [0, limit]; `fallback` when it cannot be told.
+double weighedLoad(const ReadingInputs& inputs, const std::function<double(const double*)>& spring_force,
+                   double mean_accel_z, double body_mass, double limit, double fallback);
+
+}  // namespace pc_ekf
