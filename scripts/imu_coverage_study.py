@@ -3,7 +3,7 @@
 and zero: tare, on synthetic drives over the paper's speed bump
 (config/vehicle_imu.yaml, road replaced by the analytic bump).
 
-  /usr/bin/python3 scripts/imu_coverage_study.py BIN_DIR [--seeds N] [--samples N]
+  scripts/imu_coverage_study.py BIN_DIR [--seeds N] [--samples N]
 
 Prints one row per (channels, zero, method): runs, covered within 3 reported
 std and healthy, silent (off by more than 3 std and healthy), median std of M

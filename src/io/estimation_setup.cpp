@@ -102,26 +102,6 @@ RoadFreeRecord roadFreeRecord(EstimatorConfig& c, const MeasurementSeries& recor
   const double mean_accel_z = count > 0 ? accel_z / count : 0.0;
   const Eigen::VectorXd v = r.model->inputNoiseVariance(absolute, relative, mean_accel_z);
   c.measurement.input_noise_variance.assign(v.data(), v.data() + v.size());
-  // Per sample: the quadrature error of the increments, added to the
-  // reading's own variance (the message's, or the noise rule's floor).
-  const Eigen::MatrixXd quadrature = r.model->quadratureVariance(mean_accel_z);
-  for (std::size_t k = 0; k < r.outputs.size() && quadrature.cols() == static_cast<Eigen::Index>(r.outputs.size()); ++k) {
-    Measurement& m = r.outputs[k];
-    const Eigen::Index count = m.values.size();
-    if (m.variances.size() != count) {
-      m.variances = Eigen::VectorXd::Constant(count, std::numeric_limits<double>::quiet_NaN());
-    }
-    for (Eigen::Index i = 0; i < count; ++i) {
-      const int ch = m.channels[static_cast<std::size_t>(i)];
-      const double extra = quadrature(ch, static_cast<Eigen::Index>(k));
-      if (!(extra > 0.0)) continue;
-      const double base = std::isfinite(m.variances[i])
-                              ? m.variances[i]
-                              : (noise.rule == NoiseRule::kSensor ? noise.channel_std[ch] * noise.channel_std[ch]
-                                                                  : noise.r_floor);
-      m.variances[i] = base + extra;
-    }
-  }
   return r;
 }
 

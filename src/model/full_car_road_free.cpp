@@ -198,26 +198,6 @@ std::unique_ptr<ModelBatch> FullCarRoadFreeModel::prepare(const Eigen::MatrixXd&
   return std::make_unique<FullCarRoadFreeBatch>(constants(params), inputs_);
 }
 
-Eigen::VectorXd FullCarRoadFreeModel::weighedVehicle(double mean_accel_z) const {
-  Eigen::VectorXd vehicle = nominal_vector_;
-  if (zero_ != ZeroConvention::kTare) return vehicle;  // tare: the load the record weighs
-  const auto c0 = constants(Eigen::MatrixXd(vehicle));
-  const auto& p0 = c0->points.front();
-  const int body = fullCarDescription().parameters().at("body_mass");
-  const int added = fullCarDescription().parameters().at("added_mass");
-  const auto springs = [&](const double* in) {
-    double f = 0.0;
-    for (int i = 0; i < 4; ++i) {
-      const double x = p0.delta_ref[i] - in[i];
-      f += p0.k[i] * x + p0.k3[i] * x * x * x;
-    }
-    return f;
-  };
-  vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[body],
-                               4.0 * std::max(vehicle[added], vehicle[body]), vehicle[added]);
-  return vehicle;
-}
-
 Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
                                                          const Eigen::VectorXd& relative,
                                                          double mean_accel_z) const {
@@ -225,7 +205,24 @@ Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& 
   if (absolute.size() != n || relative.size() != n) {
     throw std::invalid_argument("inputNoiseVariance: one std per input");
   }
-  const auto c = constants(Eigen::MatrixXd(weighedVehicle(mean_accel_z)));
+  Eigen::VectorXd vehicle = nominal_vector_;
+  if (zero_ == ZeroConvention::kTare) {  // the load the record weighs
+    const auto c0 = constants(Eigen::MatrixXd(vehicle));
+    const auto& p0 = c0->points.front();
+    const int body = fullCarDescription().parameters().at("body_mass");
+    const int added = fullCarDescription().parameters().at("added_mass");
+    const auto springs = [&](const double* in) {
+      double f = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        const double x = p0.delta_ref[i] - in[i];
+        f += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+      return f;
+    };
+    vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[body],
+                                 4.0 * std::max(vehicle[added], vehicle[body]), vehicle[added]);
+  }
+  const auto c = constants(Eigen::MatrixXd(vehicle));
   const auto& p = c->points.front();
   const bool gyros = n > kGyroY;
   const std::vector<int> integrated = gyros ? std::vector<int>{kGyroX, kGyroY} : std::vector<int>{};
@@ -239,27 +236,6 @@ Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& 
       });
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(12);
   variance.tail(4) = v;
-  return variance;
-}
-
-Eigen::MatrixXd FullCarRoadFreeModel::quadratureVariance(double mean_accel_z) const {
-  const std::vector<double>& t = inputs_->times();
-  Eigen::MatrixXd variance = Eigen::MatrixXd::Zero(12, static_cast<Eigen::Index>(t.size()));
-  if (inputs_->count() <= kGyroY) return variance;
-  const auto c = constants(Eigen::MatrixXd(weighedVehicle(mean_accel_z)));
-  const auto& p = c->points.front();
-  double in[10] = {}, specific = 0.0;
-  Eigen::Vector3d before = Eigen::Vector3d::Zero();  // at rest before the first sample
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    inputs_->at(t[k], in);
-    const Eigen::Vector3d now = bodyAcceleration(*c, p, in, &specific);
-    const double dt = t[k] - (k == 0 ? 0.0 : t[k - 1]);
-    // As the roll plane's: (change of the integrand times dt)^2 / 12.
-    const Eigen::Vector3d jump = (now - before) * dt;
-    variance(10, static_cast<Eigen::Index>(k)) = jump[2] * jump[2] / 12.0;
-    variance(11, static_cast<Eigen::Index>(k)) = jump[1] * jump[1] / 12.0;
-    before = now;
-  }
   return variance;
 }
 

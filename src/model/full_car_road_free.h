@@ -52,11 +52,8 @@ class FullCarRoadFreeModel : public MechanicalModel {
                                      const Eigen::VectorXd& relative,
                                      double mean_accel_z) const override;
 
-  Eigen::MatrixXd quadratureVariance(double mean_accel_z) const override;
-
  private:
   std::unique_ptr<FullCarRoadFreeConstants> constants(const Eigen::MatrixXd& params) const;
-  Eigen::VectorXd weighedVehicle(double mean_accel_z) const;
 
   FullCarParameters nominal_;
   FullCarModel with_road_;  // the same vehicle's checks and equilibrium

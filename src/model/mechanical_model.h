@@ -95,10 +95,6 @@ class MechanicalModel {
                                              double /*mean_accel_z*/) const {
     return {};
   }
-  // Road-free models: per model channel (rows) and input sample (columns),
-  // the variance of the error of predicting a reading by quadrature over a
-  // sample interval (a gyro increment when the integrand changes within it).
-  virtual Eigen::MatrixXd quadratureVariance(double /*mean_accel_z*/) const { return {}; }
 
   // Full parameter vector (every physical constant of the model), in the
   // order of description().parameters().

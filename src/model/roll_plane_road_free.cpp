@@ -185,27 +185,6 @@ std::unique_ptr<ModelBatch> RollPlaneRoadFreeModel::prepare(const Eigen::MatrixX
   return std::make_unique<RoadFreeBatch>(constants(params), inputs_);
 }
 
-Eigen::VectorXd RollPlaneRoadFreeModel::weighedVehicle(double mean_accel_z) const {
-  Eigen::VectorXd vehicle = nominal_vector_;
-  // With tare the record weighs the load (the derivatives scale with 1 / (m + M)).
-  if (zero_ != ZeroConvention::kTare) return vehicle;
-  const auto c0 = constants(Eigen::MatrixXd(vehicle));
-  const RoadFreeConstants::Point& p0 = c0->points.front();
-  const int m = rollPlaneDescription().parameters().at("bar_mass");
-  const int added = rollPlaneDescription().parameters().at("added_mass");
-  const auto springs = [&](const double* in) {
-    double f = 0.0;
-    for (int i = 0; i < 2; ++i) {
-      const double x = p0.delta_ref[i] - in[kU1 + i];
-      f += p0.k[i] * x + p0.k3[i] * x * x * x;
-    }
-    return f;
-  };
-  vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[m],
-                               4.0 * std::max(vehicle[added], vehicle[m]), vehicle[added]);
-  return vehicle;
-}
-
 Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
                                                            const Eigen::VectorXd& relative,
                                                            double mean_accel_z) const {
@@ -213,7 +192,25 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
   if (absolute.size() != n || relative.size() != n) {
     throw std::invalid_argument("inputNoiseVariance: one std per input");
   }
-  const auto c = constants(Eigen::MatrixXd(weighedVehicle(mean_accel_z)));
+  Eigen::VectorXd vehicle = nominal_vector_;
+  // With tare the record weighs the load (the derivatives scale with 1 / (m + M)).
+  if (zero_ == ZeroConvention::kTare) {
+    const auto c0 = constants(Eigen::MatrixXd(vehicle));
+    const RoadFreeConstants::Point& p0 = c0->points.front();
+    const int m = rollPlaneDescription().parameters().at("bar_mass");
+    const int added = rollPlaneDescription().parameters().at("added_mass");
+    const auto springs = [&](const double* in) {
+      double f = 0.0;
+      for (int i = 0; i < 2; ++i) {
+        const double x = p0.delta_ref[i] - in[kU1 + i];
+        f += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+      return f;
+    };
+    vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[m],
+                                 4.0 * std::max(vehicle[added], vehicle[m]), vehicle[added]);
+  }
+  const auto c = constants(Eigen::MatrixXd(vehicle));
   const RoadFreeConstants::Point& p = c->points.front();
   const std::vector<int> integrated = n > kGyro ? std::vector<int>{kGyro} : std::vector<int>{};
   const Eigen::VectorXd v = inputOutputVariance(
@@ -226,26 +223,6 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
       });
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(7);
   variance.tail(3) = v;
-  return variance;
-}
-
-Eigen::MatrixXd RollPlaneRoadFreeModel::quadratureVariance(double mean_accel_z) const {
-  const std::vector<double>& t = inputs_->times();
-  Eigen::MatrixXd variance = Eigen::MatrixXd::Zero(7, static_cast<Eigen::Index>(t.size()));
-  if (inputs_->count() <= kGyro) return variance;
-  const auto c = constants(Eigen::MatrixXd(weighedVehicle(mean_accel_z)));
-  const RoadFreeConstants::Point& p = c->points.front();
-  double in[5], specific = 0.0, before = 0.0;  // phi'' at rest before the first sample
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    inputs_->at(t[k], in);
-    const double now = rollAcceleration(*c, p, in, inputs_->integral(kGyro, t[k]), &specific);
-    const double dt = t[k] - (k == 0 ? 0.0 : t[k - 1]);
-    // A change of phi'' at an unknown instant of the interval: the
-    // trapezoid's error is uniform over +-(change dt / 2), variance (change dt)^2 / 12.
-    const double jump = (now - before) * dt;
-    variance(6, static_cast<Eigen::Index>(k)) = jump * jump / 12.0;
-    before = now;
-  }
   return variance;
 }
 

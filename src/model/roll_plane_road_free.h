@@ -57,12 +57,9 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
   Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& absolute,
                                      const Eigen::VectorXd& relative,
                                      double mean_accel_z) const override;
-  Eigen::MatrixXd quadratureVariance(double mean_accel_z) const override;
   const ReadingInputs& inputs() const { return *inputs_; }
 
  private:
-  // The nominal vector, with tare its added mass the load the record weighs.
-  Eigen::VectorXd weighedVehicle(double mean_accel_z) const;
   std::unique_ptr<RoadFreeConstants> constants(const Eigen::MatrixXd& params) const;
 
   VehicleParameters nominal_;
