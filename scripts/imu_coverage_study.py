@@ -3,7 +3,7 @@
 and zero: tare, on synthetic drives over the paper's speed bump
 (config/vehicle_imu.yaml, road replaced by the analytic bump).
 
-  scripts/imu_coverage_study.py BIN_DIR [--seeds N] [--samples N]
+  /usr/bin/python3 scripts/imu_coverage_study.py BIN_DIR [--seeds N] [--samples N]
 
 Prints one row per (channels, zero, method): runs, covered within 3 reported
 std and healthy, silent (off by more than 3 std and healthy), median std of M
@@ -16,7 +16,11 @@ LOADS = [(150.0, 0.62), (280.0, 0.90)]
 
 def config_text(zero, imu, samples, mass, position):
     text = open(os.path.join(ROOT, "config", "vehicle_imu.yaml")).read()
-    text = text.replace("  source: topic ", "  source: speed_bump #", 1)
+    text = text.replace("  source: none ", "  source: speed_bump #", 1)  # the road as told
+    start = text.index("  road:                         # the road the simulated")
+    text = text[:start] + text[text.index("  sensor:", start):]  # the truth on that road too
+    text = text.replace("  samples: 2000 ", "  samples: %d #" % samples, 1)
+    text = text.replace("  duration: 10.0\n", "  duration: 3.0\n", 1)
     text = text.replace("  zero: tare ", "  zero: %s #" % zero, 1)
     if not imu:
         text = text.replace("  channels: [u1, u2, v1, v2, accel_y, accel_z, gyro_x]",
@@ -31,7 +35,6 @@ def config_text(zero, imu, samples, mass, position):
                             "    noise_floor: [5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3]", 1)
     xi_m = (mass / 200.0 - 1.0) / 0.5
     xi_d = (position / 0.762 - 1.0) / 0.25
-    text += "\nsampling: {samples: %d, duration: 3.0}\n" % samples
     text = text.replace("truth:                          # synthetic drives only",
                         "truth:\n  xi: [%.10f, %.10f] #" % (xi_m, xi_d), 1)
     return text

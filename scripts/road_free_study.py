@@ -2,7 +2,7 @@
 """Road-free estimation on roads the estimator is not told: coverage, silent
 runs and spreads of M and d_CG (config/vehicle_imu.yaml, road.source none).
 
-  scripts/road_free_study.py BIN_DIR [--seeds N] [--methods one_step,es_mda]
+  /usr/bin/python3 scripts/road_free_study.py BIN_DIR [--seeds N] [--methods one_step,es_mda]
 
 Each run synthesises a 200 Hz drive of the truth on one road (truth.road),
 for one vehicle (the paper's, or nine values off by up to 6 %), one load
