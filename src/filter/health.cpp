@@ -245,7 +245,9 @@ HealthStatus HealthMonitor::assess(const UpdateDiagnostics& update, const Foreca
     h.nis_window_outside = static_cast<int>(window_.size()) == settings_.nis_window &&
                            (h.nis_window_mean < h.window_lower || h.nis_window_mean > h.window_upper);
   }
-  if (settings_.support_every_sample) assessSupport(coeffs, &h);
+  if (settings_.support_every > 0 && ++assessed_ % settings_.support_every == 0) {
+    assessSupport(coeffs, &h);
+  }
   if (!h.non_finite) {
     const Eigen::VectorXd mean = pcMean(coeffs), sd = pcStddev(coeffs);
     if (last_mean_.size() == mean.size()) {

@@ -21,10 +21,12 @@ struct HealthSettings {
   int nis_window = 10;
   double nis_confidence = 0.99;  // two-sided
   int support_draws = 2000;      // germ samples for the outside-support mass
-  // false: assess() leaves mass_outside_support empty and support_exceeded
-  // false; a caller that needs them for some samples only (estimate_offline:
-  // the last) asks with assessSupport(). Nothing else depends on them.
-  bool support_every_sample = true;
+  // assess() computes the mass outside the support at every k-th sample (0:
+  // never); at the others it leaves mass_outside_support empty and
+  // support_exceeded false, and a caller that needs them (estimate_offline:
+  // the last sample) asks with assessSupport(). The support rate (warning
+  // only) counts the assessed samples. Nothing else depends on them.
+  int support_every = 1;
   double support_mass_limit = 0.05;
   std::uint64_t seed = 11;
   // Relative leave-one-out error of the forecast's projection above which a
@@ -106,6 +108,7 @@ class HealthMonitor {
   Eigen::VectorXd lower_, upper_;
   std::vector<double> bound_cache_[2];  // [lower, upper][dof], NaN = not yet computed
   std::deque<std::pair<double, int>> window_;  // (nis, channels)
+  long assessed_ = 0;                          // samples seen by assess() (support_every)
   Eigen::VectorXd last_mean_, last_std_;
 };
 

@@ -64,7 +64,7 @@ class OneStepFilter {
   // Throws std::invalid_argument (state untouched) when the sample is before
   // the filter's time, has unknown/duplicate channels or non-finite values.
   StepResult process(const Measurement& m);
-  // health.support_every_sample = false: the mass outside the support of the
+  // health.support_every != 1: the mass outside the support of the
   // sample r (this filter's newest), filled in (HealthMonitor::assessSupport).
   void assessSupport(StepResult* r) { health_.assessSupport(r->coefficients, &r->health); }
   void reset();

@@ -118,14 +118,14 @@ TEST(Health, MassOutsideThePriorSupportIsMeasured) {
   EXPECT_FALSE(shifted.band_nested);  // the band moved outside the previous one
 }
 
-// support_every_sample: false (estimate_offline): no mass per sample, and
+// support_every: 0 (estimate_offline's coherence filter): no mass per sample, and
 // assessSupport on the last sample gives what assess gave there.
 TEST(Health, SupportAssessedOnRequestEqualsThePerSampleOne) {
   GrowthProblem p(0.5);
   OneStepSettings every;
   every.noise = NoiseModel{0.01, 1e-12};
   OneStepSettings on_request = every;
-  on_request.health.support_every_sample = false;
+  on_request.health.support_every = 0;
   OneStepFilter a(p.propagator, every), b(p.propagator, on_request);
   StepResult ra, rb;
   for (int k = 1; k <= 8; ++k) {
