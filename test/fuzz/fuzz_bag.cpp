@@ -41,7 +41,7 @@ void checkRecord(const pc_ekf::BagRecord& r) {
     if (i > 0) check(m.time > r.samples[i - 1].time);
     check(static_cast<Eigen::Index>(m.channels.size()) == m.values.size() && !m.channels.empty());
     for (std::size_t k = 0; k < m.channels.size(); ++k) {
-      check(m.channels[k] >= 0 && m.channels[k] < 4);
+      check(m.channels[k] >= 0 && m.channels[k] < 7);  // the roll plane: u, v and IMU
       if (k > 0) check(m.channels[k] > m.channels[k - 1]);
     }
     check(m.values.allFinite());

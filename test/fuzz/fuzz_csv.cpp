@@ -27,7 +27,7 @@ void checkMeasurements(const pc_ekf::MeasurementSeries& series) {
     if (i > 0) check(m.time > series[i - 1].time);
     check(static_cast<Eigen::Index>(m.channels.size()) == m.values.size());
     for (std::size_t k = 0; k < m.channels.size(); ++k) {
-      check(m.channels[k] >= 0 && m.channels[k] < 4);
+      check(m.channels[k] >= 0 && m.channels[k] < static_cast<int>(pc_ekf::rollPlaneChannels().size()));
       if (k > 0) check(m.channels[k] > m.channels[k - 1]);
     }
     check(m.values.allFinite());
