@@ -8,7 +8,10 @@ namespace pc_ekf {
 
 ReadingInputs::ReadingInputs(std::vector<std::string> names, std::vector<double> times,
                              std::vector<std::vector<double>> columns)
-    : names_(std::move(names)), t_(std::move(times)), v_(std::move(columns)) {
+    : names_(std::move(names)),
+      t_(std::move(times)),
+      v_(std::move(columns)),
+      series_(static_cast<int>(std::max<std::size_t>(v_.size(), 1))) {
   if (t_.empty()) throw std::invalid_argument("road-free inputs: no samples");
   if (v_.size() != names_.size()) throw std::invalid_argument("road-free inputs: column count");
   for (std::size_t k = 1; k < t_.size(); ++k) {
@@ -45,17 +48,12 @@ ReadingInputs::ReadingInputs(std::vector<std::string> names, std::vector<double>
     }
     cum_.push_back(std::move(cum));
   }
+  series_ = SampledRoad(t_, v_);
 }
 
 void ReadingInputs::at(double t, double* out) const {
-  if (t <= t_.front() || t >= t_.back()) {
-    const std::size_t k = t <= t_.front() ? 0 : t_.size() - 1;
-    for (std::size_t c = 0; c < v_.size(); ++c) out[c] = v_[c][k];
-    return;
-  }
-  const std::size_t i = std::upper_bound(t_.begin(), t_.end(), t) - t_.begin() - 1;
-  const double w = (t - t_[i]) / (t_[i + 1] - t_[i]);
-  for (std::size_t c = 0; c < v_.size(); ++c) out[c] = v_[c][i] + w * (v_[c][i + 1] - v_[c][i]);
+  Eigen::Map<Eigen::VectorXd> values(out, count());
+  series_.heights(t, values);
 }
 
 double ReadingInputs::previousTime(double t) const {

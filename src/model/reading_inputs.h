@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/model/road_input.h"
+
 namespace pc_ekf {
 
 class ReadingInputs {
@@ -36,6 +38,7 @@ class ReadingInputs {
   std::vector<double> t_;
   std::vector<std::vector<double>> v_;    // [input][sample], gaps filled
   std::vector<std::vector<double>> cum_;  // [input][sample]: integral up to t_k
+  SampledRoad series_;                    // v_ by time, for the interpolation
 };
 
 }  // namespace pc_ekf
