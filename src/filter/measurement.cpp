@@ -39,11 +39,13 @@ Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
       if (std::isfinite(m.variances[i])) v[i] = m.variances[i] + relative[i];
     }
   }
-  if (channel_extra_variance.size() != 0) {
-    for (Eigen::Index i = 0; i < v.size(); ++i) {
-      const int c = m.channels[static_cast<std::size_t>(i)];
-      if (c >= 0 && c < channel_extra_variance.size()) v[i] += channel_extra_variance[c];
+  if (m.extra_variances.size() != 0) {
+    if (m.extra_variances.size() != m.values.size()) {
+      throw std::invalid_argument("noise: " + std::to_string(m.extra_variances.size()) +
+                                  " inherited variances for " + std::to_string(m.values.size()) +
+                                  " values");
     }
+    v += m.extra_variances;
   }
   return v;
 }
@@ -60,27 +62,25 @@ Eigen::VectorXd NoiseModel::stackedVariances(const std::vector<Measurement>& ser
   return out;
 }
 
+Measurement onlyChannels(const Measurement& m, const std::vector<int>& keep) {
+  Measurement kept;
+  kept.time = m.time;
+  std::vector<Eigen::Index> rows;
+  for (std::size_t i = 0; i < m.channels.size(); ++i) {
+    if (std::find(keep.begin(), keep.end(), m.channels[i]) == keep.end()) continue;
+    kept.channels.push_back(m.channels[i]);
+    rows.push_back(static_cast<Eigen::Index>(i));
+  }
+  kept.values = m.values(rows);
+  if (m.variances.size() != 0) kept.variances = m.variances(rows);
+  if (m.extra_variances.size() != 0) kept.extra_variances = m.extra_variances(rows);
+  return kept;
+}
+
 MeasurementSeries onlyChannels(const MeasurementSeries& series, const std::vector<int>& keep) {
   MeasurementSeries out;
   out.reserve(series.size());
-  for (const Measurement& m : series) {
-    Measurement kept;
-    kept.time = m.time;
-    std::vector<double> values, variances;
-    const bool own = m.variances.size() != 0;
-    for (std::size_t i = 0; i < m.channels.size(); ++i) {
-      if (std::find(keep.begin(), keep.end(), m.channels[i]) == keep.end()) continue;
-      kept.channels.push_back(m.channels[i]);
-      values.push_back(m.values[static_cast<Eigen::Index>(i)]);
-      if (own) variances.push_back(m.variances[static_cast<Eigen::Index>(i)]);
-    }
-    kept.values = Eigen::Map<const Eigen::VectorXd>(values.data(), static_cast<Eigen::Index>(values.size()));
-    if (own) {
-      kept.variances =
-          Eigen::Map<const Eigen::VectorXd>(variances.data(), static_cast<Eigen::Index>(variances.size()));
-    }
-    out.push_back(std::move(kept));
-  }
+  for (const Measurement& m : series) out.push_back(onlyChannels(m, keep));
   return out;
 }
 

@@ -16,6 +16,9 @@ struct Measurement {
   // NoiseModel's rule). Where given, R_jj = variance + (r_relative_c z_j)^2.
   // (Initialised here so that Measurement{t, channels, values} stays warning-free.)
   Eigen::VectorXd variances{};
+  // Optional, per value: added to R_jj, what the reading inherits from the
+  // noise of readings used as inputs (road-free, errors in variables).
+  Eigen::VectorXd extra_variances{};
 };
 
 using MeasurementSeries = std::vector<Measurement>;
@@ -40,9 +43,6 @@ struct NoiseModel {
   // One r_relative per model channel (empty: r_relative for every channel):
   // an IMU's noise does not grow with the 9.81 of gravity in its reading.
   Eigen::VectorXd channel_relative;
-  // Added to R_jj per model channel (empty: nothing): what a reading inherits
-  // from the noise of readings used as inputs (road-free, errors in variables).
-  Eigen::VectorXd channel_extra_variance;
   Eigen::VectorXd variances(const Measurement& m) const;
   // Over a whole record, stacked in sample order.
   Eigen::VectorXd stackedVariances(const std::vector<Measurement>& series) const;
@@ -51,6 +51,7 @@ struct NoiseModel {
 // The series with only the channels in `keep` (ascending model indices);
 // samples left with none stay (as samples without readings).
 MeasurementSeries onlyChannels(const MeasurementSeries& series, const std::vector<int>& keep);
+Measurement onlyChannels(const Measurement& m, const std::vector<int>& keep);
 
 // Every k-th sample (k = decimation), keeping samples k, 2k, ... (1-based).
 MeasurementSeries decimate(const MeasurementSeries& series, int decimation);

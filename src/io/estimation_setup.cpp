@@ -25,86 +25,6 @@ std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
   return roadOf(c, c.road);
 }
 
-RoadFreeRecord roadFreeRecord(EstimatorConfig& c, const MeasurementSeries& record) {
-  const ModelType& type = *c.model_type;
-  const ModelType::RoadFreeInputs wanted = type.roadFreeInputs();
-  const auto& channels = type.channelNames();
-  const auto indexOf = [&](const std::string& name) {
-    return static_cast<int>(std::find(channels.begin(), channels.end(), name) - channels.begin());
-  };
-  std::vector<std::string> names = wanted.required;
-  for (const std::string& o : wanted.optional) {
-    const int ch = indexOf(o);
-    const bool read = std::any_of(record.begin(), record.end(), [&](const Measurement& m) {
-      return std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end();
-    });
-    if (read) names.push_back(o);
-  }
-  std::vector<double> times;
-  std::vector<std::vector<double>> columns(names.size());
-  for (const Measurement& m : record) {
-    times.push_back(m.time);
-    for (std::size_t i = 0; i < names.size(); ++i) {
-      const int ch = indexOf(names[i]);
-      double v = std::numeric_limits<double>::quiet_NaN();
-      for (std::size_t j = 0; j < m.channels.size(); ++j) {
-        if (m.channels[j] == ch) v = m.values[static_cast<Eigen::Index>(j)];
-      }
-      columns[i].push_back(v);
-    }
-  }
-  std::shared_ptr<const ReadingInputs> inputs;
-  try {
-    inputs = std::make_shared<const ReadingInputs>(names, times, columns);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(c.source + ": road.source none: " + e.what());
-  }
-  RoadFreeRecord r;
-  try {
-    r.model = type.buildRoadFree(*c.modelParameters(), inputs, c.measurement.zero);
-  } catch (const std::invalid_argument& e) {
-    throw ConfigError(c.source + ": key 'road.source': " + e.what());
-  }
-  std::vector<int> outputs;
-  for (int ch : channelIndices(c)) {
-    if (r.model->channelIsInput(ch)) continue;
-    if (!r.model->channelModelled(ch)) {
-      throw ConfigError(c.source + ": key 'measurement.channels': road-free model " + type.name() +
-                        " cannot predict '" + channels[static_cast<std::size_t>(ch)] +
-                        "' from this record (its inputs: " + std::to_string(names.size()) + ")");
-    }
-    outputs.push_back(ch);
-  }
-  if (outputs.empty()) {
-    throw ConfigError(c.source + ": key 'measurement.channels': road.source none needs an IMU "
-                      "channel to predict (the suspension readings are its inputs)");
-  }
-  r.outputs = onlyChannels(record, outputs);
-  // Each input's noise from the config's rule: an absolute and a relative part.
-  const NoiseModel noise = makeNoiseModel(c);
-  Eigen::VectorXd absolute(static_cast<Eigen::Index>(names.size())), relative(absolute.size());
-  for (std::size_t i = 0; i < names.size(); ++i) {
-    const int ch = indexOf(names[i]);
-    const auto e = static_cast<Eigen::Index>(i);
-    relative[e] = noise.channel_relative.size() != 0 ? noise.channel_relative[ch] : noise.r_relative;
-    absolute[e] = noise.rule == NoiseRule::kSensor ? noise.channel_std[ch] : std::sqrt(noise.r_floor);
-  }
-  double accel_z = 0.0;
-  long count = 0;
-  const int az = indexOf("accel_z");
-  for (const Measurement& m : record) {
-    for (std::size_t j = 0; j < m.channels.size(); ++j) {
-      if (m.channels[j] != az) continue;
-      accel_z += m.values[static_cast<Eigen::Index>(j)];
-      ++count;
-    }
-  }
-  const double mean_accel_z = count > 0 ? accel_z / count : 0.0;
-  const Eigen::VectorXd v = r.model->inputNoiseVariance(absolute, relative, mean_accel_z);
-  c.measurement.input_noise_variance.assign(v.data(), v.data() + v.size());
-  return r;
-}
-
 std::shared_ptr<const ContactRoad> makeTruthRoad(const EstimatorConfig& c) {
   if (c.truth.road) return roadOf(c, *c.truth.road);
   if (c.road.source == RoadSource::kNone) {
@@ -249,8 +169,6 @@ NoiseModel makeNoiseModel(const EstimatorConfig& c) {
                                                     c.measurement.sensor_std.size());
   n.channel_relative = Eigen::Map<const Eigen::VectorXd>(
       c.measurement.r_relative_per_channel.data(), c.measurement.r_relative_per_channel.size());
-  n.channel_extra_variance = Eigen::Map<const Eigen::VectorXd>(
-      c.measurement.input_noise_variance.data(), c.measurement.input_noise_variance.size());
   return n;
 }
 

@@ -23,17 +23,6 @@ namespace pc_ekf {
 // (sine and course are two-contact roads).
 std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
                                             std::shared_ptr<const ContactRoad> sampled = nullptr);
-// Road-free estimation (road.source: none): the record's input readings
-// (ModelType::roadFreeInputs) drive the model's road-free form, the other
-// selected channels are what it predicts. Also fills
-// c.measurement.input_noise_variance (what each output inherits from the
-// inputs' noise, from the config's noise settings). Throws ConfigError for a
-// missing input or a selected channel the road-free model cannot predict.
-struct RoadFreeRecord {
-  std::shared_ptr<const MechanicalModel> model;
-  MeasurementSeries outputs;
-};
-RoadFreeRecord roadFreeRecord(EstimatorConfig& c, const MeasurementSeries& record);
 // The truth's model (its vehicle, readings as configured) on makeTruthRoad.
 std::shared_ptr<const MechanicalModel> truthOnItsRoad(const EstimatorConfig& c);
 // The road the truth of a synthetic drive drives on: truth.road, else the

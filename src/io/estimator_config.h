@@ -74,10 +74,6 @@ struct MeasurementConfig {
   // A list in the YAML: one value per channel (the model's order here; empty =
   // the scalar above for every channel).
   std::vector<double> noise_relative_per_channel, r_relative_per_channel;
-  // Filled by the road-free setup, not read from YAML: per model channel, the
-  // variance its reading inherits from the noise of the readings used as
-  // inputs (errors in variables; empty = none).
-  std::vector<double> input_noise_variance;
   // The model's readings: the zero convention, and readings kept as states
   // when the convention or a selected channel (IMU) needs them.
   ReadingSettings readings(const ModelDescription& model) const;

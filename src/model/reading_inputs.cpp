@@ -51,6 +51,36 @@ ReadingInputs::ReadingInputs(std::vector<std::string> names, std::vector<double>
   series_ = SampledRoad(t_, v_);
 }
 
+ReadingInputs::ReadingInputs(std::vector<std::string> names)
+    : names_(std::move(names)),
+      v_(names_.size()),
+      cum_(names_.size()),
+      series_(static_cast<int>(std::max<std::size_t>(names_.size(), 1))) {}
+
+std::string ReadingInputs::append(double t, const double* values) {
+  if (!std::isfinite(t) || (!t_.empty() && !(t > t_.back()))) {
+    return "road-free inputs: sample time " + std::to_string(t) + " not after the last one";
+  }
+  std::vector<double> row(names_.size());
+  for (std::size_t c = 0; c < names_.size(); ++c) {
+    row[c] = values[c];
+    if (std::isnan(row[c]) && !t_.empty()) row[c] = v_[c].back();
+    if (!std::isfinite(row[c])) {
+      return "road-free input '" + names_[c] + "' " +
+             (std::isnan(values[c]) ? "not read yet" : "not finite");
+    }
+  }
+  series_.append(t, names_.empty() ? std::vector<double>{0.0} : row);
+  for (std::size_t c = 0; c < names_.size(); ++c) {
+    // The first value from t = 0, as the whole record's.
+    cum_[c].push_back(t_.empty() ? row[c] * t
+                                 : cum_[c].back() + 0.5 * (row[c] + v_[c].back()) * (t - t_.back()));
+    v_[c].push_back(row[c]);
+  }
+  t_.push_back(t);
+  return "";
+}
+
 void ReadingInputs::at(double t, double* out) const {
   Eigen::Map<Eigen::VectorXd> values(out, count());
   series_.heights(t, values);

@@ -1,7 +1,8 @@
 // Readings used as inputs (road-free estimation, docs/method.md §4.10): a
-// record's channels by time, linearly interpolated (a missing value is
-// interpolated from its neighbours), held before the first and after the
-// last sample; the sample times themselves, and running integrals.
+// record's channels by time, linearly interpolated, held before the first
+// and after the last sample; the sample times themselves, and running
+// integrals. A whole record fills a missing value from its neighbours; a
+// stream holds the last one.
 #pragma once
 
 #include <Eigen/Dense>
@@ -19,6 +20,15 @@ class ReadingInputs {
   // input never read.
   ReadingInputs(std::vector<std::string> names, std::vector<double> times,
                 std::vector<std::vector<double>> columns);
+  // A stream (the node, and estimate_offline the same way): no samples yet,
+  // each one appended as it arrives.
+  explicit ReadingInputs(std::vector<std::string> names);
+  // values[c]: input c at t (NaN = not read: held at its last value). Returns
+  // "" or why the sample cannot be taken (t not after the last sample, an
+  // input not read yet or infinite); then nothing changes. Not thread-safe:
+  // no model may read the inputs while a sample is appended.
+  std::string append(double t, const double* values);
+  bool empty() const { return t_.empty(); }
   int count() const { return static_cast<int>(names_.size()); }
   const std::vector<std::string>& names() const { return names_; }
   const std::vector<double>& times() const { return t_; }

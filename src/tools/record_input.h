@@ -10,6 +10,7 @@
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/record_sensitivity.h"
+#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/tools/ros_on_demand.h"
 
 namespace pc_ekf {
@@ -21,8 +22,8 @@ struct RecordInput {
 
 // `bag` and `csv` are paths ("" when not given; at most one of them).
 // With road.source none the model is the road-free one built from the
-// record, and config.measurement.input_noise_variance is filled.
-inline RecordInput loadRecord(EstimatorConfig& config, const std::string& bag,
+// record (RoadFreeStream), the series its outputs.
+inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& bag,
                               const std::string& csv, std::uint64_t seed) {
   RecordInput r;
   std::shared_ptr<const ContactRoad> bag_road;

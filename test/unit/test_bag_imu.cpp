@@ -137,7 +137,7 @@ TEST(NoiseModelVariances, AMessageVarianceReplacesTheSensorStdAndNaNKeepsIt) {
   EXPECT_THROW(noise.variances(m), std::invalid_argument);
   // onlyChannels keeps the variances with their values.
   m.variances = Eigen::Vector3d(0.25, 4e-4, kNaN);
-  const MeasurementSeries kept = onlyChannels({m}, {4, 5});
+  const MeasurementSeries kept = onlyChannels(MeasurementSeries{m}, {4, 5});
   ASSERT_EQ(kept[0].variances.size(), 2);
   EXPECT_DOUBLE_EQ(kept[0].variances[0], 4e-4);
 }

@@ -204,6 +204,50 @@ TEST(FullCarRoadFree, ReproducesTheFullModelsImuFromItsSuspensionReadings) {
   EXPECT_LT(worst[3], 2e-3);
 }
 
+// A stream (the node) appends the samples one by one: the same inputs,
+// integrals and previous times as the whole record, and a missing reading
+// held at its last value; a refused sample changes nothing.
+TEST(ReadingInputs, AStreamIsTheWholeRecord) {
+  std::vector<double> times;
+  std::vector<std::vector<double>> in(2);
+  for (int k = 1; k <= 40; ++k) {
+    times.push_back(0.005 * k + 0.001 * (k % 3));
+    in[0].push_back(std::sin(0.3 * k));
+    in[1].push_back(0.1 * k * k);
+  }
+  const std::vector<std::string> names{"u1", "gyro_x"};
+  const ReadingInputs whole(names, times, in);
+  ReadingInputs stream(names);
+  EXPECT_TRUE(stream.empty());
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    const double row[2] = {in[0][k], in[1][k]};
+    ASSERT_EQ(stream.append(times[k], row), "");
+  }
+  for (double t : {0.0, 0.0031, 0.05, 0.1234, 0.2, 0.25}) {
+    double a[2], b[2];
+    whole.at(t, a);
+    stream.at(t, b);
+    EXPECT_EQ(a[0], b[0]);
+    EXPECT_EQ(a[1], b[1]);
+    EXPECT_DOUBLE_EQ(whole.integral(1, t), stream.integral(1, t));
+    EXPECT_EQ(whole.previousTime(t), stream.previousTime(t));
+  }
+  const double nan = std::nan("");
+  const double late[2] = {nan, 5.0};
+  EXPECT_NE(stream.append(times.back(), late).find("not after the last"), std::string::npos);
+  ASSERT_EQ(stream.append(1.0, late), "");
+  double held[2];
+  stream.at(1.0, held);
+  EXPECT_EQ(held[0], in[0].back());  // u1 held
+  EXPECT_EQ(held[1], 5.0);
+  ReadingInputs fresh(names);
+  EXPECT_NE(fresh.append(0.1, late).find("'u1' not read yet"), std::string::npos);
+  EXPECT_TRUE(fresh.empty());
+  const double inf[2] = {1.0, INFINITY};
+  EXPECT_NE(fresh.append(0.1, inf).find("'gyro_x' not finite"), std::string::npos);
+  EXPECT_TRUE(fresh.empty());
+}
+
 // Errors in variables: the variance an output inherits from noisy inputs,
 // against Monte Carlo draws of that noise.
 TEST(RollPlaneRoadFree, InputNoiseVarianceMatchesMonteCarlo) {

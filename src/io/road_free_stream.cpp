@@ -1,0 +1,117 @@
+#include "pc_ekf/io/road_free_stream.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/model_type.h"
+
+namespace pc_ekf {
+
+std::vector<std::string> RoadFreeStream::inputsFor(const EstimatorConfig& c,
+                                                   const MeasurementSeries* record) {
+  const ModelType::RoadFreeInputs wanted = c.model_type->roadFreeInputs();
+  const std::vector<int> selected = channelIndices(c);
+  std::vector<std::string> names = wanted.required;
+  for (const std::string& o : wanted.optional) {
+    const int ch = c.model_type->description().channelIndex(o);
+    if (std::find(selected.begin(), selected.end(), ch) == selected.end()) continue;
+    const bool read = !record || std::any_of(record->begin(), record->end(), [&](const Measurement& m) {
+      return std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end();
+    });
+    if (read) names.push_back(o);
+  }
+  return names;
+}
+
+RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs)
+    : source_(c.source) {
+  const ModelType& type = *c.model_type;
+  for (const std::string& name : inputs) {
+    input_channels_.push_back(type.description().channelIndex(name));
+  }
+  inputs_ = std::make_shared<ReadingInputs>(inputs);
+  try {
+    model_ = type.buildRoadFree(*c.modelParameters(), inputs_, c.measurement.zero);
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(c.source + ": key 'road.source': " + e.what());
+  }
+  const auto& channels = type.channelNames();
+  for (int ch : channelIndices(c)) {
+    if (model_->channelIsInput(ch)) continue;
+    if (!model_->channelModelled(ch)) {
+      throw ConfigError(c.source + ": key 'measurement.channels': road-free model " + type.name() +
+                        " cannot predict '" + channels[static_cast<std::size_t>(ch)] +
+                        "' from its inputs (" + std::to_string(inputs.size()) + " readings)");
+    }
+    outputs_.push_back(ch);
+  }
+  if (outputs_.empty()) {
+    throw ConfigError(c.source + ": key 'measurement.channels': road.source none needs an IMU "
+                      "channel to predict (the suspension readings are its inputs)");
+  }
+  // Each input's noise by the config's rule: an absolute and a relative part.
+  const NoiseModel noise = makeNoiseModel(c);
+  absolute_.resize(static_cast<Eigen::Index>(inputs.size()));
+  relative_.resize(absolute_.size());
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    const int ch = input_channels_[i];
+    const auto e = static_cast<Eigen::Index>(i);
+    relative_[e] = noise.channel_relative.size() != 0 ? noise.channel_relative[ch] : noise.r_relative;
+    absolute_[e] = noise.rule == NoiseRule::kSensor ? noise.channel_std[ch] : std::sqrt(noise.r_floor);
+  }
+  accel_z_ = type.description().channelIndex("accel_z");
+  inherited_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(channels.size()));
+}
+
+std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
+  std::vector<double> in(input_channels_.size(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t j = 0; j < m.channels.size(); ++j) {
+    const auto it = std::find(input_channels_.begin(), input_channels_.end(), m.channels[j]);
+    if (it != input_channels_.end()) in[it - input_channels_.begin()] = m.values[static_cast<Eigen::Index>(j)];
+  }
+  const std::string problem = inputs_->append(m.time, in.data());
+  if (!problem.empty()) return problem;
+  ++samples_;
+  Measurement o = onlyChannels(m, outputs_);
+  for (std::size_t j = 0; j < o.channels.size(); ++j) {
+    if (o.channels[j] != accel_z_) continue;
+    accel_z_sum_ += o.values[static_cast<Eigen::Index>(j)];
+    ++accel_z_count_;
+  }
+  // The inherited variance from the inputs so far, renewed at 1, 2, 4, ...
+  // samples: a stream's cost stays linear, and early samples are not
+  // weighed by a statistic of readings not yet taken.
+  if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
+  o.extra_variances.resize(o.values.size());
+  for (std::size_t j = 0; j < o.channels.size(); ++j) {
+    o.extra_variances[static_cast<Eigen::Index>(j)] = inherited_[o.channels[j]];
+  }
+  *out = std::move(o);
+  return "";
+}
+
+void RoadFreeStream::updateInputNoise() {
+  const double mean_accel_z = accel_z_count_ > 0 ? accel_z_sum_ / static_cast<double>(accel_z_count_) : 0.0;
+  inherited_ = model_->inputNoiseVariance(absolute_, relative_, mean_accel_z);
+}
+
+RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record));
+  RoadFreeRecord r;
+  r.outputs.reserve(record.size());
+  for (std::size_t k = 0; k < record.size(); ++k) {
+    Measurement out;
+    const std::string problem = stream.add(record[k], &out);
+    if (!problem.empty()) {
+      throw ConfigError(c.source + ": road.source none: sample " + std::to_string(k + 1) +
+                        " (t = " + std::to_string(record[k].time) + " s): " + problem);
+    }
+    r.outputs.push_back(std::move(out));
+  }
+  r.model = stream.model();
+  return r;
+}
+
+}  // namespace pc_ekf

@@ -1,0 +1,68 @@
+// Road-free estimation on a stream (road.source none, docs/method.md §4.10):
+// each sample's input readings (ModelType::roadFreeInputs) are appended to
+// the inputs that drive the model's road-free form, and the other selected
+// channels come out as the readings it predicts, with what they inherit from
+// the inputs' noise. estimator_node feeds it sample by sample and
+// estimate_offline feeds it a whole record the same way, so both give the
+// same numbers.
+#pragma once
+
+#include <Eigen/Dense>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/model/mechanical_model.h"
+#include "pc_ekf/model/reading_inputs.h"
+
+namespace pc_ekf {
+
+class RoadFreeStream {
+ public:
+  // `inputs`: the model's required inputs then the optional ones used.
+  // Throws ConfigError when the model cannot take them or cannot predict a
+  // selected channel, or no selected channel is left to predict.
+  RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs);
+  // The inputs of a record or stream: the required ones, and each optional
+  // one that is selected (measurement.channels) and, when `record` is given,
+  // read in it.
+  static std::vector<std::string> inputsFor(const EstimatorConfig& c,
+                                            const MeasurementSeries* record = nullptr);
+
+  // Built on the inputs appended so far (they grow under it).
+  const std::shared_ptr<const MechanicalModel>& model() const { return model_; }
+  const std::vector<int>& outputChannels() const { return outputs_; }
+
+  // Appends m's inputs and writes its outputs to `out`, each with the
+  // variance it inherits from the inputs' noise (Measurement::
+  // extra_variances). Returns "" or why the sample was refused (an input not
+  // read yet, a time not after the last); then nothing changes.
+  std::string add(const Measurement& m, Measurement* out);
+
+ private:
+  void updateInputNoise();
+
+  std::string source_;
+  std::shared_ptr<ReadingInputs> inputs_;
+  std::shared_ptr<const MechanicalModel> model_;
+  std::vector<int> input_channels_;  // model channel per input
+  std::vector<int> outputs_;          // ascending model channels
+  Eigen::VectorXd absolute_, relative_;  // each input's noise
+  int accel_z_ = -1;
+  double accel_z_sum_ = 0.0;
+  long accel_z_count_ = 0;
+  long samples_ = 0;
+  Eigen::VectorXd inherited_;  // per model channel
+};
+
+// A whole record through the stream: the model and the outputs. Throws
+// ConfigError naming the sample a stream would refuse.
+struct RoadFreeRecord {
+  std::shared_ptr<const MechanicalModel> model;
+  MeasurementSeries outputs;
+};
+RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+
+}  // namespace pc_ekf
