@@ -1,6 +1,8 @@
 // The docs' inventories are complete: every executable and script the
 // package installs (CMakeLists.txt) is in docs/tools.md, every rostest
-// (test/ros/*.test) in docs/reliability.md's rostest table.
+// (test/ros/*.test) in docs/reliability.md's rostest table. And the docs
+// say what the code does: their history (commit hashes, times of day,
+// work-log wording) lives in CHANGELOG.md only.
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -78,6 +80,48 @@ TEST(DocsInventory, EveryRostestIsInReliabilityMd) {
         << "rostest " << name << " is not in docs/reliability.md's rostest table";
   }
   EXPECT_GT(count, 10);
+}
+
+// 7-40 hex digits with a letter and a digit.
+const std::regex& commitHash() {
+  static const std::regex hash("\\b(?=[0-9a-f]*[a-f])(?=[0-9a-f]*[0-9])[0-9a-f]{7,40}\\b");
+  return hash;
+}
+
+// README.md and docs/*.md: no commit hash (7-40 hex digits with a letter
+// and a digit), no time of day (hh:mm) and no work-log phrase.
+TEST(DocsInventory, HistoryIsOnlyInTheChangelog) {
+  std::vector<std::string> files = {"README.md"};
+  for (const auto& e : std::filesystem::directory_iterator(kRoot + "/docs")) {
+    if (e.path().extension() == ".md") files.push_back("docs/" + e.path().filename().string());
+  }
+  EXPECT_GT(files.size(), 10u);
+  const std::regex& hash = commitHash();
+  const std::regex clock("\\b([01][0-9]|2[0-3]):[0-5][0-9]\\b");
+  const std::regex log("this session|previous session|earlier session|before that|"
+                       "what changed|yesterday|this morning|this afternoon",
+                       std::regex::icase);
+  for (const std::string& file : files) {
+    std::istringstream text(fileText(file));
+    int line_number = 0;
+    for (std::string line; std::getline(text, line);) {
+      ++line_number;
+      std::smatch m;
+      for (const std::regex* r : {&hash, &clock, &log}) {
+        if (std::regex_search(line, m, *r)) {
+          ADD_FAILURE() << file << ":" << line_number << ": '" << m[0]
+                        << "' is history; it belongs in CHANGELOG.md";
+        }
+      }
+    }
+  }
+}
+
+// The check above finds what it looks for.
+TEST(DocsInventory, HistoryPatternsMatch) {
+  const std::regex& hash = commitHash();
+  EXPECT_TRUE(std::regex_search(std::string("a clean checkout of b05076a"), hash));
+  EXPECT_FALSE(std::regex_search(std::string("1000000 samples, defaced"), hash));
 }
 
 }  // namespace
