@@ -157,9 +157,13 @@ std::string configSection(const std::string& path) {
 std::string configSchemaMarkdown(const std::vector<std::string>& sections) {
   const auto cell = [](const std::string& text, bool code) {
     if (code) return "`" + text + "`";
+    // Outside `code`, a bare | would end the cell and <name> read as HTML.
     std::string out;
-    for (std::size_t i = 0; i < text.size(); ++i) {  // a bare | would end the cell
-      if (text[i] == '|' && (i == 0 || text[i - 1] != '\\')) out += '\\';
+    bool in_code = false;
+    for (std::size_t i = 0; i < text.size(); ++i) {
+      in_code ^= text[i] == '`';
+      const bool escaped = i > 0 && text[i - 1] == '\\';
+      if (!in_code && !escaped && (text[i] == '|' || text[i] == '<')) out += '\\';
       out += text[i];
     }
     return out;
