@@ -45,6 +45,10 @@ std::vector<UncertainParameter> readUncertain(YamlMapReader& root, const ModelTy
     u.nominal = values[it - names.begin()];
     r.number("nominal", u.nominal, -kInf, kInf);
     r.number("relative_range", u.relative_range, 0.0, kInf, true);
+    if (!r.has("relative_range")) {  // 0 would be a parameter fixed at its nominal
+      r.fail("relative_range", "(absent)",
+             "the prior's relative half-width, > 0 (value = nominal (1 + relative_range xi))");
+    }
     u.germ = readGermSpec(r.map("germ"));
     r.finish();
     out.push_back(u);

@@ -1,6 +1,7 @@
 // The one configuration schema shared by estimator_node and the CLIs
 // (YAML, rosparam-friendly: plain maps, lists and scalars only).
-// See config/speed_bump.yaml for every key with its meaning and default.
+// Every key with its type, default, domain and meaning: config_schema.cpp
+// (docs/configuration.md); config/speed_bump.yaml lists them all too.
 #pragma once
 
 #include <Eigen/Dense>

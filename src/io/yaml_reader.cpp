@@ -5,8 +5,39 @@
 #include <sstream>
 
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/number_text.h"
 
 namespace pc_ekf {
+
+namespace {
+thread_local YamlKeyLog* active_log = nullptr;
+
+template <typename T, typename Text>
+std::string listText(const std::vector<T>& values, Text text) {
+  std::string out = "[";
+  for (std::size_t i = 0; i < values.size(); ++i) out += (i ? ", " : "") + text(values[i]);
+  return out + "]";
+}
+}  // namespace
+
+YamlKeyLog::YamlKeyLog() : previous_(active_log) { active_log = this; }
+YamlKeyLog::~YamlKeyLog() { active_log = previous_; }
+YamlKeyLog* YamlKeyLog::active() { return active_log; }
+
+std::string rangeDomainText(double min, double max, bool min_exclusive) {
+  const double inf = std::numeric_limits<double>::infinity();
+  if (min == -inf && max == inf) return "any";
+  return (min_exclusive ? "(" : "[") + (min == -inf ? "-inf" : roundTripText(min)) + ", " +
+         (max == inf ? "inf)" : roundTripText(max) + "]");
+}
+
+void YamlMapReader::note(const std::string& key, const std::string& kind, std::string value,
+                         std::string domain) {
+  if (!read_.insert(key).second) return;  // noted when first asked for
+  if (YamlKeyLog* log = YamlKeyLog::active()) {
+    log->add({keyPath(key), kind, std::move(value), std::move(domain)});
+  }
+}
 
 std::string yamlValueText(const YAML::Node& node) {
   if (!node.IsDefined() || node.IsNull()) return "(empty)";
@@ -40,7 +71,7 @@ bool YamlMapReader::has(const std::string& key) const {
 bool YamlMapReader::isMap(const std::string& key) const { return has(key) && node_[key].IsMap(); }
 
 YamlMapReader YamlMapReader::map(const std::string& key) {
-  read_.insert(key);
+  note(key, "map", "{}");
   if (!has(key)) return YamlMapReader(YAML::Node(), keyPath(key), source_);
   const YAML::Node child = node_[key];
   if (!child.IsMap()) fail(key, yamlValueText(child), "a map of keys");
@@ -52,7 +83,7 @@ bool YamlMapReader::isSequence(const std::string& key) const {
 }
 
 YAML::Node YamlMapReader::sequence(const std::string& key) {
-  read_.insert(key);
+  note(key, "list", "[]");
   if (!has(key)) return YAML::Node();
   const YAML::Node child = node_[key];
   if (!child.IsSequence()) fail(key, yamlValueText(child), "a list");
@@ -85,7 +116,7 @@ std::string rangeText(double min, double max, bool min_exclusive) {
 
 void YamlMapReader::number(const std::string& key, double& value, double min, double max,
                            bool min_exclusive) {
-  read_.insert(key);
+  note(key, "number", roundTripText(value), rangeDomainText(min, max, min_exclusive));
   if (!has(key)) return;
   double v = 0.0;
   const YAML::Node n = node_[key];
@@ -96,7 +127,8 @@ void YamlMapReader::number(const std::string& key, double& value, double min, do
 }
 
 void YamlMapReader::integer(const std::string& key, int& value, int min, int max) {
-  read_.insert(key);
+  note(key, "integer", std::to_string(value),
+       "[" + std::to_string(min) + ", " + std::to_string(max) + "]");
   if (!has(key)) return;
   const YAML::Node n = node_[key];
   double v = 0.0;
@@ -108,7 +140,7 @@ void YamlMapReader::integer(const std::string& key, int& value, int min, int max
 }
 
 void YamlMapReader::unsignedInteger(const std::string& key, std::uint64_t& value) {
-  read_.insert(key);
+  note(key, "unsigned", std::to_string(value), "[0, 2^64)");
   if (!has(key)) return;
   const YAML::Node n = node_[key];
   const std::string s = n.IsScalar() ? n.Scalar() : "";
@@ -119,7 +151,7 @@ void YamlMapReader::unsignedInteger(const std::string& key, std::uint64_t& value
 }
 
 void YamlMapReader::text(const std::string& key, std::string& value) {
-  read_.insert(key);
+  note(key, "text", value.empty() ? "\"\"" : value);
   if (!has(key)) return;
   const YAML::Node n = node_[key];
   if (!n.IsScalar()) fail(key, yamlValueText(n), "a text value");
@@ -128,6 +160,7 @@ void YamlMapReader::text(const std::string& key, std::string& value) {
 
 void YamlMapReader::numberList(const std::string& key, std::vector<double>& value,
                                std::size_t size_min, std::size_t size_max) {
+  note(key, "number list", listText(value, roundTripText));
   const YAML::Node seq = sequence(key);
   if (!seq.IsDefined() || seq.IsNull()) return;
   const std::string expected =
@@ -148,7 +181,7 @@ void YamlMapReader::numberList(const std::string& key, std::vector<double>& valu
 
 void YamlMapReader::numberPerItem(const std::string& key, std::vector<double>& value,
                                   std::size_t size, double min, double max) {
-  read_.insert(key);
+  note(key, "number or list", listText(value, roundTripText), rangeDomainText(min, max, false));
   if (!has(key)) return;
   const YAML::Node n = node_[key];
   if (n.IsScalar()) {
@@ -172,6 +205,7 @@ void YamlMapReader::numberPerItem(const std::string& key, std::vector<double>& v
 }
 
 void YamlMapReader::textList(const std::string& key, std::vector<std::string>& value) {
+  note(key, "text list", listText(value, [](const std::string& t) { return t; }));
   const YAML::Node seq = sequence(key);
   if (!seq.IsDefined() || seq.IsNull()) return;
   std::vector<std::string> out;

@@ -12,6 +12,38 @@
 
 namespace pc_ekf {
 
+// One key a YamlMapReader was asked for: its full path (list items as
+// `seq[3]`), what was read (number, integer, unsigned, text, number list,
+// text list, number or list, map, list), the value it held when asked (the
+// default when the key is absent) and, for numbers, its accepted range.
+struct YamlKeyRead {
+  std::string path;
+  std::string kind;
+  std::string value;
+  std::string domain;
+};
+
+// While one lives, every YamlMapReader on this thread appends the keys it is
+// asked for (the configuration schema's test: src/io/config_schema.h).
+class YamlKeyLog {
+ public:
+  YamlKeyLog();
+  ~YamlKeyLog();
+  YamlKeyLog(const YamlKeyLog&) = delete;
+  YamlKeyLog& operator=(const YamlKeyLog&) = delete;
+  const std::vector<YamlKeyRead>& reads() const { return reads_; }
+  // The log of this thread (nullptr: none).
+  static YamlKeyLog* active();
+  void add(YamlKeyRead read) { reads_.push_back(std::move(read)); }
+
+ private:
+  std::vector<YamlKeyRead> reads_;
+  YamlKeyLog* previous_;
+};
+
+// A number range as the schema writes it: "[0, 1]", "(0, inf)", "any".
+std::string rangeDomainText(double min, double max, bool min_exclusive);
+
 class YamlMapReader {
  public:
   // `node` must be a map (or absent/null, read as empty); `path` is its key path
@@ -48,6 +80,8 @@ class YamlMapReader {
   const std::string& source() const { return source_; }
 
  private:
+  void note(const std::string& key, const std::string& kind, std::string value,
+            std::string domain = "");
   YAML::Node node_;
   std::string path_;
   std::string source_;

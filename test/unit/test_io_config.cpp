@@ -77,6 +77,23 @@ TEST(Config, NegativeMassIsRefusedNamingTheKey) {
   EXPECT_NE(added.find("vehicle.added_mass"), std::string::npos) << added;
 }
 
+// Without relative_range the parameter would be fixed at its nominal
+// (value = nominal (1 + 0 xi)) while reported as estimated: refused.
+TEST(Config, UncertainEntryNeedsItsRelativeRange) {
+  const std::string e = errorOf(
+      "uncertain:\n  - {name: added_mass, relative_range: 0.5}\n  - {name: bar_mass}\n");
+  EXPECT_NE(e.find("uncertain[1].relative_range"), std::string::npos) << e;
+  EXPECT_NE(e.find("(absent)"), std::string::npos) << e;
+  EXPECT_NE(errorOf("uncertain: [{name: bar_mass, relative_range: 0}]\n").find("positive"),
+            std::string::npos);
+}
+
+// Nothing to estimate: neither uncertain: nor tolerances: is refused.
+TEST(Config, AConfigNeedsSomethingToEstimate) {
+  EXPECT_NE(errorOf("pc: {order: 2}\n").find("'uncertain'"), std::string::npos);
+  EXPECT_NE(errorOf("tolerances: {bar_mass: 0}\n").find("'tolerances'"), std::string::npos);
+}
+
 TEST(Config, UnknownKeyIsRefusedNamingTheKey) {
   const std::string e = errorOf(std::string("vehicle: {bar_mas: 580}\n") + kMinimal);
   EXPECT_NE(e.find("vehicle.bar_mas"), std::string::npos) << e;
