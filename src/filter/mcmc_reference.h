@@ -13,6 +13,14 @@
 //       Metropolis chain of the exact target;
 //   (4) per parameter: mean, std, split R-hat and the multi-chain effective
 //       sample size (Vehtari et al. 2021, Geyer's initial monotone sequence).
+// `sampler: kEnsemble` replaces (2)-(3) by an affine-invariant ensemble
+// (Goodman & Weare 2010 stretch move, mcmc_stretch_move.h): `chains` walkers
+// in two halves, each half's proposals one residual batch. Affine invariance
+// makes it as fast on a narrow straight ridge (vehicle_live.yaml's mass-scale
+// direction at n = 15) as on a round target, where the adaptive Metropolis
+// mixes only once its covariance has found the ridge (R-hat 1.4 there after
+// 380k simulations; docs/real_vehicle_reference.md §5). The default stays
+// the adaptive Metropolis, so existing callers' draws do not change.
 #pragma once
 
 #include <Eigen/Dense>
@@ -27,11 +35,19 @@
 
 namespace pc_ekf {
 
+enum class McmcSampler {
+  kAdaptiveMetropolis,  // random-walk chains, covariance adapted during burn-in
+  kEnsemble,            // stretch-move walkers; needs chains even and >= 2 n
+};
+
 struct McmcSettings {
-  int chains = 8;
+  McmcSampler sampler = McmcSampler::kAdaptiveMetropolis;
+  int chains = 8;       // Metropolis chains, or ensemble walkers
   int burn_in = 2000;   // iterations per chain, adaptation only, discarded
   int samples = 10000;  // kept iterations per chain
-  int adapt_every = 50;
+  int thin = 1;         // store every thin-th kept iteration (draws' memory)
+  int adapt_every = 50; // Metropolis only
+  double stretch = 2.0; // ensemble only: the stretch move's a (z in [1/a, a])
   double start_spread = 2.0;  // chains start at mode + spread * N(0, H^-1)
   double target_acceptance = 0.234;
   std::uint64_t seed = 1;
@@ -57,11 +73,12 @@ struct McmcReference {
   Eigen::VectorXd effective_size;  // bulk ESS over all chains, per parameter
   Eigen::VectorXd mean_error;      // Monte Carlo std error of `mean`: stddev / sqrt(ESS)
   double acceptance = 0.0;         // of the kept iterations
-  double proposal_scale = 0.0;     // final, relative to 2.38 / sqrt(n)
+  double proposal_scale = 0.0;     // final, relative to 2.38 / sqrt(n) (ensemble: a)
   long simulations = 0;            // forward-model runs of this call
   double seconds = 0.0;
-  // chains x samples x n, germ units (kept draws).
-  std::vector<Eigen::MatrixXd> draws;  // one n x samples matrix per chain
+  // chains x (samples / thin) x n, germ units (kept draws). The ensemble's
+  // walkers are its chains for R-hat and ESS (see mcmc_stretch_move.h).
+  std::vector<Eigen::MatrixXd> draws;  // one n x (samples / thin) matrix per chain
 };
 
 // Split R-hat and bulk ESS of one scalar over chains (rows: chains, columns:

@@ -6,10 +6,14 @@
 // reference mean +- std (R-hat, ESS) and each filter's mean error and std
 // ratio in reference std units. Not part of bench.sh (minutes of wall time).
 //   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
-//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file)
+//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file),
+//   PC_EKF_MCMC_SAMPLER (metropolis, or ensemble: CHAINS are then the walkers),
+//   PC_EKF_MCMC_THIN (1)
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
+#include <string>
 
 #include "bench_support.h"
 #include "pc_ekf/filter/mcmc_reference.h"
@@ -38,6 +42,14 @@ void BM_McmcReferenceN11(benchmark::State& state) {
   ms.burn_in = static_cast<int>(envInt("PC_EKF_MCMC_BURN_IN", 4000));
   ms.samples = static_cast<int>(envInt("PC_EKF_MCMC_SAMPLES", 20000));
   ms.seed = static_cast<std::uint64_t>(envInt("PC_EKF_MCMC_SEED", 1));
+  ms.thin = static_cast<int>(envInt("PC_EKF_MCMC_THIN", 1));
+  const char* sampler = std::getenv("PC_EKF_MCMC_SAMPLER");
+  const std::string sampler_name = sampler ? sampler : "metropolis";
+  if (sampler_name == "ensemble") {
+    ms.sampler = McmcSampler::kEnsemble;
+  } else if (sampler_name != "metropolis") {
+    throw std::invalid_argument("PC_EKF_MCMC_SAMPLER: metropolis or ensemble, not " + sampler_name);
+  }
   // Mode search from the prior mean and both filters' estimates.
   std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(mapping.count())};
   for (const OfflineResult* r : {&one_step, &es_mda}) {
@@ -52,10 +64,10 @@ void BM_McmcReferenceN11(benchmark::State& state) {
                          ms, [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); });
   }
   std::printf(
-      "MCMC: %d chains x (%d burn-in + %d kept), acceptance %.3f, scale %.2f, %ld "
+      "MCMC (%s): %d chains x (%d burn-in + %d kept, thin %d), acceptance %.3f, scale %.2f, %ld "
       "simulations, %.1f s; %d competing modes; one-step %.2f s healthy %d, ES-MDA %.2f s "
       "healthy %d\n",
-      ms.chains, ms.burn_in, ms.samples, ref.acceptance, ref.proposal_scale, ref.simulations,
+      sampler_name.c_str(), ms.chains, ms.burn_in, ms.samples, ms.thin, ref.acceptance, ref.proposal_scale, ref.simulations,
       ref.seconds, ref.competing_modes, one_step.wall_seconds, one_step.healthy,
       es_mda.wall_seconds, es_mda.healthy);
   std::printf("%-22s %14s %12s %7s %7s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
