@@ -9,7 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "pc_ekf/filter/mcmc_stretch_move.h"
+#include "pc_ekf/filter/mcmc_samplers.h"
 #include "pc_ekf/filter/posterior_prior.h"
 
 namespace pc_ekf {
@@ -40,7 +40,8 @@ void validate(const PosteriorResidual& residual, const std::vector<GermSpec>& pr
           std::to_string(2 * n) + ", stretch > 1 and burn_in >= 0");
     }
   } else if (s.burn_in < 2 * s.adapt_every || s.adapt_every < 1 ||
-             !(s.target_acceptance > 0.0 && s.target_acceptance < 1.0)) {
+             (s.sampler == McmcSampler::kAdaptiveMetropolis &&
+              !(s.target_acceptance > 0.0 && s.target_acceptance < 1.0))) {
     throw std::invalid_argument(
         "runMcmcReference: need adapt_every >= 1, burn_in >= 2 adapt_every and "
         "target_acceptance in (0, 1)");
@@ -64,19 +65,6 @@ Eigen::VectorXd logPosterior(const PosteriorResidual& residual, const PriorDensi
     if (!std::isfinite(out[j])) out[j] = -kInf;
   }
   return out;
-}
-
-// Lower Cholesky factor of a covariance, with a relative ridge when it is
-// numerically singular (a parameter the data pin far tighter than others).
-Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov) {
-  cov = 0.5 * (cov + cov.transpose());
-  const double ridge = 1e-12 * std::max(cov.diagonal().maxCoeff(), 1e-300);
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    Eigen::LLT<Eigen::MatrixXd> llt(cov);
-    if (llt.info() == Eigen::Success) return llt.matrixL();
-    cov.diagonal().array() += ridge * std::pow(100.0, attempt);
-  }
-  throw std::runtime_error("runMcmcReference: proposal covariance is not positive definite");
 }
 
 // Splits every chain in two halves (rows: chains, columns: iterations).
@@ -215,6 +203,18 @@ void summarise(McmcReference& out) {
 
 }  // namespace
 
+// The ridge helps where the data pin a parameter far tighter than the others.
+Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov) {
+  cov = 0.5 * (cov + cov.transpose());
+  const double ridge = 1e-12 * std::max(cov.diagonal().maxCoeff(), 1e-300);
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    Eigen::LLT<Eigen::MatrixXd> llt(cov);
+    if (llt.info() == Eigen::Success) return llt.matrixL();
+    cov.diagonal().array() += ridge * std::pow(100.0, attempt);
+  }
+  throw std::runtime_error("runMcmcReference: proposal covariance is not positive definite");
+}
+
 double splitRHat(const Eigen::MatrixXd& chains) {
   if (chains.rows() < 1 || chains.cols() < 4) {
     throw std::invalid_argument("splitRHat: need >= 1 chain of >= 4 iterations");
@@ -285,6 +285,7 @@ McmcReference runMcmcReference(const PosteriorResidual& residual,
   }
   const Eigen::MatrixXd laplace = best->hessian.inverse();
   out.laplace_xi_stddev = laplace.diagonal().cwiseMax(0.0).cwiseSqrt();
+  out.laplace_xi_covariance = laplace;
   Eigen::MatrixXd proposal_factor = choleskyFactor(laplace);
 
   // (2) Over-dispersed starts with finite density.
@@ -308,12 +309,17 @@ McmcReference runMcmcReference(const PosteriorResidual& residual,
   }
 
   if (settings.sampler == McmcSampler::kEnsemble) {
-    StretchMoveRun run = runStretchMove(
+    SamplerRun run = runStretchMove(
         [&](const Eigen::MatrixXd& y) { return logPosterior(residual, prior, y); }, x, logp,
         settings, random.rng, progress);
     out.draws = std::move(run.draws);
     out.acceptance = run.acceptance;
-    out.proposal_scale = settings.stretch;
+    out.proposal_scale = run.scale;
+  } else if (settings.sampler == McmcSampler::kHamiltonian) {
+    SamplerRun run = runHamiltonian(residual, prior, x, laplace, settings, random.rng, progress);
+    out.draws = std::move(run.draws);
+    out.acceptance = run.acceptance;
+    out.proposal_scale = run.scale;
   } else {
     runAdaptiveMetropolis(residual, prior, x, logp, proposal_factor, settings, random, progress,
                           out);

@@ -14,7 +14,7 @@
 //   (4) per parameter: mean, std, split R-hat and the multi-chain effective
 //       sample size (Vehtari et al. 2021, Geyer's initial monotone sequence).
 // `sampler: kEnsemble` replaces (2)-(3) by an affine-invariant ensemble
-// (Goodman & Weare 2010 stretch move, mcmc_stretch_move.h): `chains` walkers
+// (Goodman & Weare 2010 stretch move, mcmc_samplers.h): `chains` walkers
 // in two halves, each half's proposals one residual batch. Affine invariance
 // makes it as fast on a narrow straight ridge (vehicle_live.yaml's mass-scale
 // direction at n = 15) as on a round target, where the adaptive Metropolis
@@ -38,6 +38,7 @@ namespace pc_ekf {
 enum class McmcSampler {
   kAdaptiveMetropolis,  // random-walk chains, covariance adapted during burn-in
   kEnsemble,            // stretch-move walkers; needs chains even and >= 2 n
+  kHamiltonian,         // HMC chains, (n + 1) x leapfrog steps simulations per iteration
 };
 
 struct McmcSettings {
@@ -46,10 +47,10 @@ struct McmcSettings {
   int burn_in = 2000;   // iterations per chain, adaptation only, discarded
   int samples = 10000;  // kept iterations per chain
   int thin = 1;         // store every thin-th kept iteration (draws' memory)
-  int adapt_every = 50; // Metropolis only
+  int adapt_every = 50; // Metropolis and Hamiltonian: burn-in adaptation period
   double stretch = 2.0; // ensemble only: the stretch move's a (z in [1/a, a])
   double start_spread = 2.0;  // chains start at mode + spread * N(0, H^-1)
-  double target_acceptance = 0.234;
+  double target_acceptance = 0.234;  // Metropolis only (Hamiltonian: 0.8)
   std::uint64_t seed = 1;
   ModeSearchSettings mode_search;
 };
@@ -59,6 +60,7 @@ struct McmcReference {
   Eigen::VectorXd xi_mean, xi_stddev;
   Eigen::MatrixXd xi_covariance;
   Eigen::VectorXd mode_xi, laplace_xi_stddev;  // step (1)
+  Eigen::MatrixXd laplace_xi_covariance;      // H^-1
   // Step (1)'s searches that ended at another maximum (not merged into an
   // earlier one) within 50 of the best log density. Random-walk chains do not
   // cross between narrow modes: when this is not 0, the draws describe the
@@ -77,7 +79,7 @@ struct McmcReference {
   long simulations = 0;            // forward-model runs of this call
   double seconds = 0.0;
   // chains x (samples / thin) x n, germ units (kept draws). The ensemble's
-  // walkers are its chains for R-hat and ESS (see mcmc_stretch_move.h).
+  // walkers are its chains for R-hat and ESS (see mcmc_samplers.h).
   std::vector<Eigen::MatrixXd> draws;  // one n x (samples / thin) matrix per chain
 };
 

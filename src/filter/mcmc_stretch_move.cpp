@@ -1,19 +1,19 @@
-// Stretch-move ensemble sampler: see mcmc_stretch_move.h.
-#include "pc_ekf/filter/mcmc_stretch_move.h"
+// Stretch-move ensemble sampler: see mcmc_samplers.h.
+#include "pc_ekf/filter/mcmc_samplers.h"
 
 #include <cmath>
 #include <string>
 
 namespace pc_ekf {
 
-StretchMoveRun runStretchMove(const LogDensityBatch& log_density, Eigen::MatrixXd x,
-                              Eigen::VectorXd logp, const McmcSettings& settings,
-                              std::mt19937_64& rng, const PosteriorProgress& progress) {
+SamplerRun runStretchMove(const LogDensityBatch& log_density, Eigen::MatrixXd x,
+                          Eigen::VectorXd logp, const McmcSettings& settings, std::mt19937_64& rng,
+                          const PosteriorProgress& progress) {
   const Eigen::Index n = x.rows(), walkers = x.cols(), half = walkers / 2;
   const double a = settings.stretch;
   std::uniform_real_distribution<double> uniform;
   std::uniform_int_distribution<Eigen::Index> partner(0, half - 1);
-  StretchMoveRun out;
+  SamplerRun out;
   const int kept = settings.samples / settings.thin;
   out.draws.assign(walkers, Eigen::MatrixXd(n, kept));
   long accepted = 0;
@@ -51,6 +51,7 @@ StretchMoveRun runStretchMove(const LogDensityBatch& log_density, Eigen::MatrixX
   }
   out.acceptance = static_cast<double>(accepted) /
                    (static_cast<double>(settings.samples) * static_cast<double>(walkers));
+  out.scale = a;
   return out;
 }
 

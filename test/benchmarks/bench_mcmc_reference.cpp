@@ -7,7 +7,7 @@
 // ratio in reference std units. Not part of bench.sh (minutes of wall time).
 //   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
 //   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file),
-//   PC_EKF_MCMC_SAMPLER (metropolis, or ensemble: CHAINS are then the walkers),
+//   PC_EKF_MCMC_SAMPLER (metropolis; ensemble: CHAINS are then the walkers; hamiltonian),
 //   PC_EKF_MCMC_THIN (1)
 #include <algorithm>
 #include <cstdio>
@@ -47,8 +47,11 @@ void BM_McmcReferenceN11(benchmark::State& state) {
   const std::string sampler_name = sampler ? sampler : "metropolis";
   if (sampler_name == "ensemble") {
     ms.sampler = McmcSampler::kEnsemble;
+  } else if (sampler_name == "hamiltonian") {
+    ms.sampler = McmcSampler::kHamiltonian;
   } else if (sampler_name != "metropolis") {
-    throw std::invalid_argument("PC_EKF_MCMC_SAMPLER: metropolis or ensemble, not " + sampler_name);
+    throw std::invalid_argument("PC_EKF_MCMC_SAMPLER: metropolis, ensemble or hamiltonian, not " +
+                                sampler_name);
   }
   // Mode search from the prior mean and both filters' estimates.
   std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(mapping.count())};
@@ -70,8 +73,18 @@ void BM_McmcReferenceN11(benchmark::State& state) {
       sampler_name.c_str(), ms.chains, ms.burn_in, ms.samples, ms.thin, ref.acceptance, ref.proposal_scale, ref.simulations,
       ref.seconds, ref.competing_modes, one_step.wall_seconds, one_step.healthy,
       es_mda.wall_seconds, es_mda.healthy);
-  std::printf("%-22s %14s %12s %7s %7s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
-              "ref std", "R-hat", "ESS", "1step dz", "std/ref", "ESMDA dz", "std/ref", "truth dz");
+  // How far the Laplace covariance H^-1 at the mode is from the draws': the
+  // eigenvalues of the draws' covariance whitened by H^-1 (all 1 for a Gaussian).
+  {
+    const Eigen::VectorXd ev = Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd>(
+                                   ref.xi_covariance, ref.laplace_xi_covariance)
+                                   .eigenvalues();
+    std::printf("draws' covariance / Laplace: eigenvalues %.3g ... %.3g\n", ev.minCoeff(),
+                ev.maxCoeff());
+  }
+  std::printf("%-22s %14s %12s %7s %7s %8s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
+              "ref std", "R-hat", "ESS", "lapl/ref", "1step dz", "std/ref", "ESMDA dz", "std/ref",
+              "truth dz");
   // The truth of every parameter (load: truth.xi; tolerances: truth.vehicle).
   const Eigen::VectorXd truth_full = truthParameters(c, *s.model);
   const auto& all = s.model->parameterNames();
@@ -80,8 +93,9 @@ void BM_McmcReferenceN11(benchmark::State& state) {
     const double m = ref.mean[i], sd = ref.stddev[i];
     const ParameterSummary &a = one_step.parameters[i], &b = es_mda.parameters[i];
     const double t = truth_full[std::find(all.begin(), all.end(), ref.names[i]) - all.begin()];
-    std::printf("%-22s %14.6g %12.4g %7.4f %7.0f | %9.3f %8.3f | %9.3f %8.3f | %9.3f\n",
-                ref.names[i].c_str(), m, sd, ref.r_hat[i], ref.effective_size[i], (a.mean - m) / sd,
+    std::printf("%-22s %14.6g %12.4g %7.4f %7.0f %8.3f | %9.3f %8.3f | %9.3f %8.3f | %9.3f\n",
+                ref.names[i].c_str(), m, sd, ref.r_hat[i], ref.effective_size[i],
+                ref.laplace_xi_stddev[i] / ref.xi_stddev[i], (a.mean - m) / sd,
                 a.stddev / sd, (b.mean - m) / sd, b.stddev / sd, (t - m) / sd);
     worst = std::max(worst, ref.r_hat[i]);
   }
