@@ -120,18 +120,10 @@ SamplerRun runHamiltonian(const PosteriorResidual& residual, const PriorDensity&
       accepted_window = 0;
       const double gain = 1.0 / std::sqrt(static_cast<double>((it + 1) / settings.adapt_every));
       log_eps += 2.0 * gain * (rate - kTargetAcceptance);
-      // The metric: covariance of the pooled later half of the burn-in so far.
-      const int from = (it + 1) / 2, count = it + 1 - from;
-      if (count * chains > 10 * n) {
-        Eigen::MatrixXd pooled(n, static_cast<Eigen::Index>(count) * chains);
-        for (int c = 0; c < chains; ++c)
-          pooled.middleCols(c * count, count) = history[c].middleCols(from, count);
-        const Eigen::MatrixXd centred = pooled.colwise() - pooled.rowwise().mean();
-        const Eigen::MatrixXd cov = centred * centred.transpose() / (pooled.cols() - 1.0);
-        if (cov.allFinite() && cov.diagonal().minCoeff() > 0.0) {
-          metric = cov;
-          factor = choleskyFactor(metric);
-        }
+      Eigen::MatrixXd cov;
+      if (burnInCovariance(history, it + 1, cov)) {
+        metric = cov;
+        factor = choleskyFactor(metric);
       }
       if (progress) {
         progress("burn-in " + std::to_string(it + 1) + "/" + std::to_string(settings.burn_in) +

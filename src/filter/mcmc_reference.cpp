@@ -149,17 +149,8 @@ void runAdaptiveMetropolis(const PosteriorResidual& residual, const PriorDensity
       accepted_window = 0;
       const double step = 1.0 / std::sqrt(static_cast<double>((it + 1) / settings.adapt_every));
       log_factor += 2.0 * step * (rate - settings.target_acceptance);
-      // Covariance of the pooled later half of the burn-in so far.
-      const int from = (it + 1) / 2, count = it + 1 - from;
-      if (count * chains > 10 * n) {
-        Eigen::MatrixXd pooled(n, static_cast<Eigen::Index>(count) * chains);
-        for (int c = 0; c < chains; ++c)
-          pooled.middleCols(c * count, count) = history[c].middleCols(from, count);
-        const Eigen::MatrixXd centred = pooled.colwise() - pooled.rowwise().mean();
-        const Eigen::MatrixXd cov = centred * centred.transpose() / (pooled.cols() - 1.0);
-        if (cov.allFinite() && cov.diagonal().minCoeff() > 0.0)
-          proposal_factor = choleskyFactor(cov);
-      }
+      Eigen::MatrixXd cov;
+      if (burnInCovariance(history, it + 1, cov)) proposal_factor = choleskyFactor(cov);
       if (progress) {
         std::ostringstream s;
         s << "burn-in " << it + 1 << "/" << settings.burn_in << ", acceptance " << rate;
@@ -213,6 +204,20 @@ Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov) {
     cov.diagonal().array() += ridge * std::pow(100.0, attempt);
   }
   throw std::runtime_error("runMcmcReference: proposal covariance is not positive definite");
+}
+
+bool burnInCovariance(const std::vector<Eigen::MatrixXd>& history, int iterations,
+                      Eigen::MatrixXd& cov) {
+  const int chains = static_cast<int>(history.size());
+  const Eigen::Index n = history.front().rows();
+  const int from = iterations / 2, count = iterations - from;
+  if (count * chains <= 10 * n) return false;
+  Eigen::MatrixXd pooled(n, static_cast<Eigen::Index>(count) * chains);
+  for (int c = 0; c < chains; ++c)
+    pooled.middleCols(c * count, count) = history[c].middleCols(from, count);
+  const Eigen::MatrixXd centred = pooled.colwise() - pooled.rowwise().mean();
+  cov = centred * centred.transpose() / (pooled.cols() - 1.0);
+  return cov.allFinite() && cov.diagonal().minCoeff() > 0.0;
 }
 
 double splitRHat(const Eigen::MatrixXd& chains) {

@@ -51,6 +51,12 @@ struct SamplerRun {
   double scale = 0.0;                  // the stretch a, or the final leapfrog step
 };
 
+// Covariance of the pooled later half of the first `iterations` burn-in
+// draws (history: one n x burn_in matrix per chain), as both adaptive samplers
+// use it. False while fewer than 10 n draws are pooled or it is degenerate.
+bool burnInCovariance(const std::vector<Eigen::MatrixXd>& history, int iterations,
+                      Eigen::MatrixXd& cov);
+
 // Lower Cholesky factor of a covariance (or metric), with a relative ridge
 // when it is numerically singular. Throws std::runtime_error if that fails.
 Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov);

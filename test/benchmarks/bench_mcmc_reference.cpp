@@ -8,7 +8,7 @@
 //   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
 //   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file),
 //   PC_EKF_MCMC_SAMPLER (metropolis; ensemble: CHAINS are then the walkers; hamiltonian),
-//   PC_EKF_MCMC_THIN (1)
+//   PC_EKF_MCMC_THIN (1), PC_EKF_MCMC_CHAIN_MEANS (set: each chain's level in M)
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -81,6 +81,13 @@ void BM_McmcReferenceN11(benchmark::State& state) {
                                    .eigenvalues();
     std::printf("draws' covariance / Laplace: eigenvalues %.3g ... %.3g\n", ev.minCoeff(),
                 ev.maxCoeff());
+  }
+  // Where each chain sits in M (germ units): its mean, std and first / last
+  // kept draw. Chains apart by more than their own spread are stuck, not mixing.
+  for (std::size_t c = 0; c < ref.draws.size() && std::getenv("PC_EKF_MCMC_CHAIN_MEANS"); ++c) {
+    const Eigen::VectorXd m0 = ref.draws[c].row(0).transpose();
+    std::printf("chain %2zu: M germ mean %.4f std %.4f first %.4f last %.4f\n", c, m0.mean(),
+                std::sqrt((m0.array() - m0.mean()).square().mean()), m0[0], m0[m0.size() - 1]);
   }
   std::printf("%-22s %14s %12s %7s %7s %8s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
               "ref std", "R-hat", "ESS", "lapl/ref", "1step dz", "std/ref", "ESMDA dz", "std/ref",
