@@ -9,6 +9,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "pc_ekf/filter/mcmc_samplers.h"
 #include "pc_ekf/filter/posterior_prior.h"
 
 namespace pc_ekf {
@@ -28,11 +29,22 @@ void validate(const PosteriorResidual& residual, const std::vector<GermSpec>& pr
   for (const auto& x : starts) {
     if (x.size() != n) throw std::invalid_argument("runMcmcReference: start of wrong size");
   }
-  if (s.chains < 2 || s.samples < 8 || s.burn_in < 2 * s.adapt_every || s.adapt_every < 1 ||
-      !(s.start_spread >= 0.0) || !(s.target_acceptance > 0.0 && s.target_acceptance < 1.0)) {
+  if (s.chains < 2 || s.thin < 1 || s.samples < 8 * s.thin || !(s.start_spread >= 0.0)) {
     throw std::invalid_argument(
-        "runMcmcReference: need chains >= 2, samples >= 8, adapt_every >= 1, burn_in >= 2 "
-        "adapt_every, start_spread >= 0 and target_acceptance in (0, 1)");
+        "runMcmcReference: need chains >= 2, thin >= 1, samples >= 8 thin and start_spread >= 0");
+  }
+  if (s.sampler == McmcSampler::kEnsemble) {
+    if (s.chains % 2 != 0 || s.chains < 2 * n || !(s.stretch > 1.0) || s.burn_in < 0) {
+      throw std::invalid_argument(
+          "runMcmcReference: the ensemble needs an even number of walkers (chains) >= 2 n = " +
+          std::to_string(2 * n) + ", stretch > 1 and burn_in >= 0");
+    }
+  } else if (s.burn_in < 2 * s.adapt_every || s.adapt_every < 1 ||
+             (s.sampler == McmcSampler::kAdaptiveMetropolis &&
+              !(s.target_acceptance > 0.0 && s.target_acceptance < 1.0))) {
+    throw std::invalid_argument(
+        "runMcmcReference: need adapt_every >= 1, burn_in >= 2 adapt_every and "
+        "target_acceptance in (0, 1)");
   }
 }
 
@@ -53,19 +65,6 @@ Eigen::VectorXd logPosterior(const PosteriorResidual& residual, const PriorDensi
     if (!std::isfinite(out[j])) out[j] = -kInf;
   }
   return out;
-}
-
-// Lower Cholesky factor of a covariance, with a relative ridge when it is
-// numerically singular (a parameter the data pin far tighter than others).
-Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov) {
-  cov = 0.5 * (cov + cov.transpose());
-  const double ridge = 1e-12 * std::max(cov.diagonal().maxCoeff(), 1e-300);
-  for (int attempt = 0; attempt < 8; ++attempt) {
-    Eigen::LLT<Eigen::MatrixXd> llt(cov);
-    if (llt.info() == Eigen::Success) return llt.matrixL();
-    cov.diagonal().array() += ridge * std::pow(100.0, attempt);
-  }
-  throw std::runtime_error("runMcmcReference: proposal covariance is not positive definite");
 }
 
 // Splits every chain in two halves (rows: chains, columns: iterations).
@@ -94,7 +93,132 @@ ChainVariances chainVariances(const Eigen::MatrixXd& c) {
   return {w, (n - 1.0) / n * w + b_over_n};
 }
 
+// One generator and its distributions for the whole run: normal_distribution
+// keeps its second variate, so sharing the objects keeps the draws of the
+// adaptive Metropolis as they were before the samplers were split.
+struct Random {
+  explicit Random(std::uint64_t seed) : rng(seed) {}
+  Eigen::MatrixXd gaussian(Eigen::Index rows, Eigen::Index cols) {
+    Eigen::MatrixXd z(rows, cols);
+    for (Eigen::Index j = 0; j < cols; ++j) {
+      for (Eigen::Index i = 0; i < rows; ++i) z(i, j) = normal(rng);
+    }
+    return z;
+  }
+  std::mt19937_64 rng;
+  std::normal_distribution<double> normal;
+  std::uniform_real_distribution<double> uniform;
+};
+
+// (3) Burn-in with adaptation, then frozen proposal; fills out's draws,
+// acceptance and proposal_scale.
+void runAdaptiveMetropolis(const PosteriorResidual& residual, const PriorDensity& prior,
+                           Eigen::MatrixXd x, Eigen::VectorXd logp, Eigen::MatrixXd proposal_factor,
+                           const McmcSettings& settings, Random& random,
+                           const PosteriorProgress& progress, McmcReference& out) {
+  const int n = prior.dimension(), chains = settings.chains;
+  const double optimal = 2.38 / std::sqrt(static_cast<double>(n));
+  double log_factor = 0.0;
+  std::vector<Eigen::MatrixXd> history(chains, Eigen::MatrixXd(n, settings.burn_in));
+  out.draws.assign(chains, Eigen::MatrixXd(n, settings.samples / settings.thin));
+  long accepted_window = 0, accepted_kept = 0;
+  const int total = settings.burn_in + settings.samples;
+  for (int it = 0; it < total; ++it) {
+    const double scale = optimal * std::exp(log_factor);
+    const Eigen::MatrixXd y = x + scale * proposal_factor * random.gaussian(n, chains);
+    const Eigen::VectorXd logq = logPosterior(residual, prior, y);
+    for (int c = 0; c < chains; ++c) {
+      if (std::isfinite(logq[c]) && std::log(random.uniform(random.rng)) < logq[c] - logp[c]) {
+        x.col(c) = y.col(c);
+        logp[c] = logq[c];
+        if (it < settings.burn_in) {
+          ++accepted_window;
+        } else {
+          ++accepted_kept;
+        }
+      }
+      if (it < settings.burn_in) {
+        history[c].col(it) = x.col(c);
+      } else if ((it - settings.burn_in) % settings.thin == 0 &&
+                 (it - settings.burn_in) / settings.thin < out.draws[c].cols()) {
+        out.draws[c].col((it - settings.burn_in) / settings.thin) = x.col(c);
+      }
+    }
+    if (it < settings.burn_in && (it + 1) % settings.adapt_every == 0) {
+      const double rate = static_cast<double>(accepted_window) / (settings.adapt_every * chains);
+      accepted_window = 0;
+      const double step = 1.0 / std::sqrt(static_cast<double>((it + 1) / settings.adapt_every));
+      log_factor += 2.0 * step * (rate - settings.target_acceptance);
+      Eigen::MatrixXd cov;
+      if (burnInCovariance(history, it + 1, cov)) proposal_factor = choleskyFactor(cov);
+      if (progress) {
+        std::ostringstream s;
+        s << "burn-in " << it + 1 << "/" << settings.burn_in << ", acceptance " << rate;
+        progress(s.str());
+      }
+    }
+    if (progress && it >= settings.burn_in && (it + 1 - settings.burn_in) % 1000 == 0) {
+      progress("sampling " + std::to_string(it + 1 - settings.burn_in) + "/" +
+               std::to_string(settings.samples));
+    }
+  }
+  out.acceptance =
+      static_cast<double>(accepted_kept) / (static_cast<double>(settings.samples) * chains);
+  out.proposal_scale = std::exp(log_factor);
+
+}
+
+// (4) Statistics of the kept draws, over the chains (or walkers).
+void summarise(McmcReference& out) {
+  const int chains = static_cast<int>(out.draws.size());
+  const Eigen::Index n = out.draws.front().rows(), kept = out.draws.front().cols();
+  Eigen::MatrixXd pooled(n, kept * chains);
+  for (int c = 0; c < chains; ++c) pooled.middleCols(c * kept, kept) = out.draws[c];
+  out.xi_mean = pooled.rowwise().mean();
+  const Eigen::MatrixXd centred = pooled.colwise() - out.xi_mean;
+  out.xi_covariance = centred * centred.transpose() / (pooled.cols() - 1.0);
+  out.xi_stddev = out.xi_covariance.diagonal().cwiseSqrt();
+  out.r_hat.resize(n);
+  out.effective_size.resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    Eigen::MatrixXd one(chains, kept);
+    for (int c = 0; c < chains; ++c) one.row(c) = out.draws[c].row(i);
+    out.r_hat[i] = splitRHat(one);
+    out.effective_size[i] = effectiveSampleSize(one);
+    out.names.push_back("xi" + std::to_string(i + 1));
+  }
+  out.mean = out.xi_mean;
+  out.stddev = out.xi_stddev;
+  out.mean_error = (out.stddev.array() / out.effective_size.array().sqrt()).matrix();
+}
+
 }  // namespace
+
+// The ridge helps where the data pin a parameter far tighter than the others.
+Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov) {
+  cov = 0.5 * (cov + cov.transpose());
+  const double ridge = 1e-12 * std::max(cov.diagonal().maxCoeff(), 1e-300);
+  for (int attempt = 0; attempt < 8; ++attempt) {
+    Eigen::LLT<Eigen::MatrixXd> llt(cov);
+    if (llt.info() == Eigen::Success) return llt.matrixL();
+    cov.diagonal().array() += ridge * std::pow(100.0, attempt);
+  }
+  throw std::runtime_error("runMcmcReference: proposal covariance is not positive definite");
+}
+
+bool burnInCovariance(const std::vector<Eigen::MatrixXd>& history, int iterations,
+                      Eigen::MatrixXd& cov) {
+  const int chains = static_cast<int>(history.size());
+  const Eigen::Index n = history.front().rows();
+  const int from = iterations / 2, count = iterations - from;
+  if (count * chains <= 10 * n) return false;
+  Eigen::MatrixXd pooled(n, static_cast<Eigen::Index>(count) * chains);
+  for (int c = 0; c < chains; ++c)
+    pooled.middleCols(c * count, count) = history[c].middleCols(from, count);
+  const Eigen::MatrixXd centred = pooled.colwise() - pooled.rowwise().mean();
+  cov = centred * centred.transpose() / (pooled.cols() - 1.0);
+  return cov.allFinite() && cov.diagonal().minCoeff() > 0.0;
+}
 
 double splitRHat(const Eigen::MatrixXd& chains) {
   if (chains.rows() < 1 || chains.cols() < 4) {
@@ -166,21 +290,14 @@ McmcReference runMcmcReference(const PosteriorResidual& residual,
   }
   const Eigen::MatrixXd laplace = best->hessian.inverse();
   out.laplace_xi_stddev = laplace.diagonal().cwiseMax(0.0).cwiseSqrt();
+  out.laplace_xi_covariance = laplace;
   Eigen::MatrixXd proposal_factor = choleskyFactor(laplace);
 
   // (2) Over-dispersed starts with finite density.
-  std::mt19937_64 rng(settings.seed);
-  std::normal_distribution<double> normal;
-  std::uniform_real_distribution<double> uniform;
-  auto gaussian = [&](Eigen::Index rows, Eigen::Index cols) {
-    Eigen::MatrixXd z(rows, cols);
-    for (Eigen::Index j = 0; j < cols; ++j) {
-      for (Eigen::Index i = 0; i < rows; ++i) z(i, j) = normal(rng);
-    }
-    return z;
-  };
+  Random random(settings.seed);
   Eigen::MatrixXd x =
-      (settings.start_spread * proposal_factor * gaussian(n, chains)).colwise() + out.mode_xi;
+      (settings.start_spread * proposal_factor * random.gaussian(n, chains)).colwise() +
+      out.mode_xi;
   Eigen::VectorXd logp = logPosterior(residual, prior, x);
   for (int attempt = 0; attempt < 20 && !logp.allFinite(); ++attempt) {
     for (int c = 0; c < chains; ++c) {
@@ -196,84 +313,23 @@ McmcReference runMcmcReference(const PosteriorResidual& residual,
     }
   }
 
-  // (3) Burn-in with adaptation, then frozen proposal.
-  const double optimal = 2.38 / std::sqrt(static_cast<double>(n));
-  double log_factor = 0.0;
-  std::vector<Eigen::MatrixXd> history(chains, Eigen::MatrixXd(n, settings.burn_in));
-  out.draws.assign(chains, Eigen::MatrixXd(n, settings.samples));
-  long accepted_window = 0, accepted_kept = 0;
-  const int total = settings.burn_in + settings.samples;
-  for (int it = 0; it < total; ++it) {
-    const double scale = optimal * std::exp(log_factor);
-    const Eigen::MatrixXd y = x + scale * proposal_factor * gaussian(n, chains);
-    const Eigen::VectorXd logq = logPosterior(residual, prior, y);
-    for (int c = 0; c < chains; ++c) {
-      if (std::isfinite(logq[c]) && std::log(uniform(rng)) < logq[c] - logp[c]) {
-        x.col(c) = y.col(c);
-        logp[c] = logq[c];
-        if (it < settings.burn_in) {
-          ++accepted_window;
-        } else {
-          ++accepted_kept;
-        }
-      }
-      if (it < settings.burn_in) {
-        history[c].col(it) = x.col(c);
-      } else {
-        out.draws[c].col(it - settings.burn_in) = x.col(c);
-      }
-    }
-    if (it < settings.burn_in && (it + 1) % settings.adapt_every == 0) {
-      const double rate = static_cast<double>(accepted_window) / (settings.adapt_every * chains);
-      accepted_window = 0;
-      const double step = 1.0 / std::sqrt(static_cast<double>((it + 1) / settings.adapt_every));
-      log_factor += 2.0 * step * (rate - settings.target_acceptance);
-      // Covariance of the pooled later half of the burn-in so far.
-      const int from = (it + 1) / 2, count = it + 1 - from;
-      if (count * chains > 10 * n) {
-        Eigen::MatrixXd pooled(n, static_cast<Eigen::Index>(count) * chains);
-        for (int c = 0; c < chains; ++c)
-          pooled.middleCols(c * count, count) = history[c].middleCols(from, count);
-        const Eigen::MatrixXd centred = pooled.colwise() - pooled.rowwise().mean();
-        const Eigen::MatrixXd cov = centred * centred.transpose() / (pooled.cols() - 1.0);
-        if (cov.allFinite() && cov.diagonal().minCoeff() > 0.0)
-          proposal_factor = choleskyFactor(cov);
-      }
-      if (progress) {
-        std::ostringstream s;
-        s << "burn-in " << it + 1 << "/" << settings.burn_in << ", acceptance " << rate;
-        progress(s.str());
-      }
-    }
-    if (progress && it >= settings.burn_in && (it + 1 - settings.burn_in) % 1000 == 0) {
-      progress("sampling " + std::to_string(it + 1 - settings.burn_in) + "/" +
-               std::to_string(settings.samples));
-    }
+  if (settings.sampler == McmcSampler::kEnsemble) {
+    SamplerRun run = runStretchMove(
+        [&](const Eigen::MatrixXd& y) { return logPosterior(residual, prior, y); }, x, logp,
+        settings, random.rng, progress);
+    out.draws = std::move(run.draws);
+    out.acceptance = run.acceptance;
+    out.proposal_scale = run.scale;
+  } else if (settings.sampler == McmcSampler::kHamiltonian) {
+    SamplerRun run = runHamiltonian(residual, prior, x, laplace, settings, random.rng, progress);
+    out.draws = std::move(run.draws);
+    out.acceptance = run.acceptance;
+    out.proposal_scale = run.scale;
+  } else {
+    runAdaptiveMetropolis(residual, prior, x, logp, proposal_factor, settings, random, progress,
+                          out);
   }
-  out.acceptance =
-      static_cast<double>(accepted_kept) / (static_cast<double>(settings.samples) * chains);
-  out.proposal_scale = std::exp(log_factor);
-
-  // (4) Statistics.
-  Eigen::MatrixXd pooled(n, static_cast<Eigen::Index>(settings.samples) * chains);
-  for (int c = 0; c < chains; ++c)
-    pooled.middleCols(c * settings.samples, settings.samples) = out.draws[c];
-  out.xi_mean = pooled.rowwise().mean();
-  const Eigen::MatrixXd centred = pooled.colwise() - out.xi_mean;
-  out.xi_covariance = centred * centred.transpose() / (pooled.cols() - 1.0);
-  out.xi_stddev = out.xi_covariance.diagonal().cwiseSqrt();
-  out.r_hat.resize(n);
-  out.effective_size.resize(n);
-  for (int i = 0; i < n; ++i) {
-    Eigen::MatrixXd one(chains, settings.samples);
-    for (int c = 0; c < chains; ++c) one.row(c) = out.draws[c].row(i);
-    out.r_hat[i] = splitRHat(one);
-    out.effective_size[i] = effectiveSampleSize(one);
-    out.names.push_back("xi" + std::to_string(i + 1));
-  }
-  out.mean = out.xi_mean;
-  out.stddev = out.xi_stddev;
-  out.mean_error = (out.stddev.array() / out.effective_size.array().sqrt()).matrix();
+  summarise(out);
   out.simulations = residual.simulations() - simulations_before;
   out.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();

@@ -13,6 +13,14 @@
 //       Metropolis chain of the exact target;
 //   (4) per parameter: mean, std, split R-hat and the multi-chain effective
 //       sample size (Vehtari et al. 2021, Geyer's initial monotone sequence).
+// `sampler` chooses what replaces (2)-(3) (mcmc_samplers.h): kEnsemble, an
+// affine-invariant ensemble (Goodman & Weare 2010 stretch move; `chains` are
+// its walkers), as fast on a narrow straight ridge as on a round target; or
+// kHamiltonian, HMC with finite-difference gradients, whose trajectories
+// follow a curved ridge. The default stays the adaptive Metropolis, so
+// existing callers' draws do not change. On vehicle_live.yaml's n = 15 ridge
+// with 1 % noise none of the three converges within 10 minutes
+// (docs/real_vehicle_reference.md §5).
 #pragma once
 
 #include <Eigen/Dense>
@@ -27,13 +35,22 @@
 
 namespace pc_ekf {
 
+enum class McmcSampler {
+  kAdaptiveMetropolis,  // random-walk chains, covariance adapted during burn-in
+  kEnsemble,            // stretch-move walkers; needs chains even and >= 2 n
+  kHamiltonian,         // HMC chains, (n + 1) x leapfrog steps simulations per iteration
+};
+
 struct McmcSettings {
-  int chains = 8;
+  McmcSampler sampler = McmcSampler::kAdaptiveMetropolis;
+  int chains = 8;       // Metropolis chains, or ensemble walkers
   int burn_in = 2000;   // iterations per chain, adaptation only, discarded
   int samples = 10000;  // kept iterations per chain
-  int adapt_every = 50;
+  int thin = 1;         // store every thin-th kept iteration (draws' memory)
+  int adapt_every = 50; // Metropolis and Hamiltonian: burn-in adaptation period
+  double stretch = 2.0; // ensemble only: the stretch move's a (z in [1/a, a])
   double start_spread = 2.0;  // chains start at mode + spread * N(0, H^-1)
-  double target_acceptance = 0.234;
+  double target_acceptance = 0.234;  // Metropolis only (Hamiltonian: 0.8)
   std::uint64_t seed = 1;
   ModeSearchSettings mode_search;
 };
@@ -43,6 +60,7 @@ struct McmcReference {
   Eigen::VectorXd xi_mean, xi_stddev;
   Eigen::MatrixXd xi_covariance;
   Eigen::VectorXd mode_xi, laplace_xi_stddev;  // step (1)
+  Eigen::MatrixXd laplace_xi_covariance;      // H^-1
   // Step (1)'s searches that ended at another maximum (not merged into an
   // earlier one) within 50 of the best log density. Random-walk chains do not
   // cross between narrow modes: when this is not 0, the draws describe the
@@ -57,11 +75,12 @@ struct McmcReference {
   Eigen::VectorXd effective_size;  // bulk ESS over all chains, per parameter
   Eigen::VectorXd mean_error;      // Monte Carlo std error of `mean`: stddev / sqrt(ESS)
   double acceptance = 0.0;         // of the kept iterations
-  double proposal_scale = 0.0;     // final, relative to 2.38 / sqrt(n)
+  double proposal_scale = 0.0;     // final, relative to 2.38 / sqrt(n) (ensemble: a)
   long simulations = 0;            // forward-model runs of this call
   double seconds = 0.0;
-  // chains x samples x n, germ units (kept draws).
-  std::vector<Eigen::MatrixXd> draws;  // one n x samples matrix per chain
+  // chains x (samples / thin) x n, germ units (kept draws). The ensemble's
+  // walkers are its chains for R-hat and ESS (see mcmc_samplers.h).
+  std::vector<Eigen::MatrixXd> draws;  // one n x (samples / thin) matrix per chain
 };
 
 // Split R-hat and bulk ESS of one scalar over chains (rows: chains, columns:

@@ -11,24 +11,6 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Residual and forward-difference Jacobian at one point.
-struct Linearisation {
-  Eigen::VectorXd x;
-  Eigen::VectorXd r;
-  Eigen::MatrixXd jacobian;
-  double f = kInf;  // 1/2 |r|^2 - log prior
-};
-
-struct Search {
-  Linearisation at;
-  Eigen::MatrixXd hessian;  // Gauss-Newton, at `at`
-  int duplicate_of = -1;
-  double lambda = 1e-3;
-  bool active = true;
-  bool converged = false;
-  int iterations = 0;
-};
-
 // Steps point into the support so that no stencil point leaves it.
 Eigen::VectorXd differenceSteps(const PriorDensity& prior, const Eigen::VectorXd& x,
                                 double relative) {
@@ -40,7 +22,39 @@ Eigen::VectorXd differenceSteps(const PriorDensity& prior, const Eigen::VectorXd
   return h;
 }
 
-// Evaluates the points and their stencils in one residual batch.
+struct Search {
+  Linearisation at;
+  Eigen::MatrixXd hessian;  // Gauss-Newton, at `at`
+  int duplicate_of = -1;
+  double lambda = 1e-3;
+  bool active = true;
+  bool converged = false;
+  int iterations = 0;
+};
+
+// Many coarse maxima lie in one basin (a narrow ridge sampled by a coarse
+// grid): a search within merge_distance Gauss-Newton std of a better one
+// would only converge to the same mode, so it stops there.
+void mergeDuplicates(std::vector<Search>& searches, double merge_distance) {
+  for (std::size_t s = 0; s < searches.size(); ++s) {
+    if (!searches[s].active) continue;
+    for (std::size_t t = 0; t < searches.size(); ++t) {
+      const Search& other = searches[t];
+      const bool better =
+          other.at.f < searches[s].at.f || (other.at.f == searches[s].at.f && t < s);
+      if (t == s || other.duplicate_of >= 0 || !better) continue;
+      const Eigen::VectorXd d = searches[s].at.x - other.at.x;
+      if (d.dot(other.hessian * d) < merge_distance * merge_distance) {
+        searches[s].active = false;
+        searches[s].duplicate_of = static_cast<int>(t);
+        break;
+      }
+    }
+  }
+}
+
+}  // namespace
+
 std::vector<Linearisation> linearise(const PosteriorResidual& residual, const PriorDensity& prior,
                                      const std::vector<Eigen::VectorXd>& points, double relative) {
   const int n = prior.dimension();
@@ -83,29 +97,6 @@ Eigen::MatrixXd gaussNewtonHessian(const PriorDensity& prior, const Linearisatio
   if (gradient != nullptr) *gradient = l.jacobian.transpose() * l.r - prior_gradient;
   return h;
 }
-
-// Many coarse maxima lie in one basin (a narrow ridge sampled by a coarse
-// grid): a search within merge_distance Gauss-Newton std of a better one
-// would only converge to the same mode, so it stops there.
-void mergeDuplicates(std::vector<Search>& searches, double merge_distance) {
-  for (std::size_t s = 0; s < searches.size(); ++s) {
-    if (!searches[s].active) continue;
-    for (std::size_t t = 0; t < searches.size(); ++t) {
-      const Search& other = searches[t];
-      const bool better =
-          other.at.f < searches[s].at.f || (other.at.f == searches[s].at.f && t < s);
-      if (t == s || other.duplicate_of >= 0 || !better) continue;
-      const Eigen::VectorXd d = searches[s].at.x - other.at.x;
-      if (d.dot(other.hessian * d) < merge_distance * merge_distance) {
-        searches[s].active = false;
-        searches[s].duplicate_of = static_cast<int>(t);
-        break;
-      }
-    }
-  }
-}
-
-}  // namespace
 
 std::vector<PosteriorModeEstimate> refineModes(const PosteriorResidual& residual,
                                                const PriorDensity& prior,

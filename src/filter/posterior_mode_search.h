@@ -5,6 +5,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <limits>
 #include <vector>
 
 #include "pc_ekf/filter/posterior_prior.h"
@@ -34,6 +35,25 @@ struct PosteriorModeEstimate {
   bool converged = false;
   int duplicate_of = -1;  // index of the start it merged into, or -1
 };
+
+// A point's whitened residual r and forward-difference Jacobian J (steps
+// `relative` x each germ's grid range, pointing into the support), and
+// F = 1/2 |r|^2 - log prior there (+inf outside the support or where r is not
+// finite). Shared by the mode search and the Hamiltonian sampler
+// (mcmc_samplers.h); all points and stencils are one residual batch.
+struct Linearisation {
+  Eigen::VectorXd x;
+  Eigen::VectorXd r;
+  Eigen::MatrixXd jacobian;
+  double f = std::numeric_limits<double>::infinity();
+};
+std::vector<Linearisation> linearise(const PosteriorResidual& residual, const PriorDensity& prior,
+                                     const std::vector<Eigen::VectorXd>& points, double relative);
+
+// Gauss-Newton Hessian of F, J^T J + the prior's curvature; *gradient = dF/dxi
+// when given.
+Eigen::MatrixXd gaussNewtonHessian(const PriorDensity& prior, const Linearisation& l,
+                                   Eigen::VectorXd* gradient);
 
 // One estimate per start (same order); starts must have finite log posterior.
 // Steps are projected onto the prior's support.

@@ -6,10 +6,14 @@
 // reference mean +- std (R-hat, ESS) and each filter's mean error and std
 // ratio in reference std units. Not part of bench.sh (minutes of wall time).
 //   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
-//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file)
+//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file),
+//   PC_EKF_MCMC_SAMPLER (metropolis; ensemble: CHAINS are then the walkers; hamiltonian),
+//   PC_EKF_MCMC_THIN (1), PC_EKF_MCMC_CHAIN_MEANS (set: each chain's level in M)
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
+#include <stdexcept>
+#include <string>
 
 #include "bench_support.h"
 #include "pc_ekf/filter/mcmc_reference.h"
@@ -38,6 +42,17 @@ void BM_McmcReferenceN11(benchmark::State& state) {
   ms.burn_in = static_cast<int>(envInt("PC_EKF_MCMC_BURN_IN", 4000));
   ms.samples = static_cast<int>(envInt("PC_EKF_MCMC_SAMPLES", 20000));
   ms.seed = static_cast<std::uint64_t>(envInt("PC_EKF_MCMC_SEED", 1));
+  ms.thin = static_cast<int>(envInt("PC_EKF_MCMC_THIN", 1));
+  const char* sampler = std::getenv("PC_EKF_MCMC_SAMPLER");
+  const std::string sampler_name = sampler ? sampler : "metropolis";
+  if (sampler_name == "ensemble") {
+    ms.sampler = McmcSampler::kEnsemble;
+  } else if (sampler_name == "hamiltonian") {
+    ms.sampler = McmcSampler::kHamiltonian;
+  } else if (sampler_name != "metropolis") {
+    throw std::invalid_argument("PC_EKF_MCMC_SAMPLER: metropolis, ensemble or hamiltonian, not " +
+                                sampler_name);
+  }
   // Mode search from the prior mean and both filters' estimates.
   std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(mapping.count())};
   for (const OfflineResult* r : {&one_step, &es_mda}) {
@@ -52,14 +67,31 @@ void BM_McmcReferenceN11(benchmark::State& state) {
                          ms, [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); });
   }
   std::printf(
-      "MCMC: %d chains x (%d burn-in + %d kept), acceptance %.3f, scale %.2f, %ld "
+      "MCMC (%s): %d chains x (%d burn-in + %d kept, thin %d), acceptance %.3f, scale %.2f, %ld "
       "simulations, %.1f s; %d competing modes; one-step %.2f s healthy %d, ES-MDA %.2f s "
       "healthy %d\n",
-      ms.chains, ms.burn_in, ms.samples, ref.acceptance, ref.proposal_scale, ref.simulations,
+      sampler_name.c_str(), ms.chains, ms.burn_in, ms.samples, ms.thin, ref.acceptance, ref.proposal_scale, ref.simulations,
       ref.seconds, ref.competing_modes, one_step.wall_seconds, one_step.healthy,
       es_mda.wall_seconds, es_mda.healthy);
-  std::printf("%-22s %14s %12s %7s %7s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
-              "ref std", "R-hat", "ESS", "1step dz", "std/ref", "ESMDA dz", "std/ref", "truth dz");
+  // How far the Laplace covariance H^-1 at the mode is from the draws': the
+  // eigenvalues of the draws' covariance whitened by H^-1 (all 1 for a Gaussian).
+  {
+    const Eigen::VectorXd ev = Eigen::GeneralizedSelfAdjointEigenSolver<Eigen::MatrixXd>(
+                                   ref.xi_covariance, ref.laplace_xi_covariance)
+                                   .eigenvalues();
+    std::printf("draws' covariance / Laplace: eigenvalues %.3g ... %.3g\n", ev.minCoeff(),
+                ev.maxCoeff());
+  }
+  // Where each chain sits in M (germ units): its mean, std and first / last
+  // kept draw. Chains apart by more than their own spread are stuck, not mixing.
+  for (std::size_t c = 0; c < ref.draws.size() && std::getenv("PC_EKF_MCMC_CHAIN_MEANS"); ++c) {
+    const Eigen::VectorXd m0 = ref.draws[c].row(0).transpose();
+    std::printf("chain %2zu: M germ mean %.4f std %.4f first %.4f last %.4f\n", c, m0.mean(),
+                std::sqrt((m0.array() - m0.mean()).square().mean()), m0[0], m0[m0.size() - 1]);
+  }
+  std::printf("%-22s %14s %12s %7s %7s %8s | %9s %8s | %9s %8s | %9s\n", "parameter", "ref mean",
+              "ref std", "R-hat", "ESS", "lapl/ref", "1step dz", "std/ref", "ESMDA dz", "std/ref",
+              "truth dz");
   // The truth of every parameter (load: truth.xi; tolerances: truth.vehicle).
   const Eigen::VectorXd truth_full = truthParameters(c, *s.model);
   const auto& all = s.model->parameterNames();
@@ -68,8 +100,9 @@ void BM_McmcReferenceN11(benchmark::State& state) {
     const double m = ref.mean[i], sd = ref.stddev[i];
     const ParameterSummary &a = one_step.parameters[i], &b = es_mda.parameters[i];
     const double t = truth_full[std::find(all.begin(), all.end(), ref.names[i]) - all.begin()];
-    std::printf("%-22s %14.6g %12.4g %7.4f %7.0f | %9.3f %8.3f | %9.3f %8.3f | %9.3f\n",
-                ref.names[i].c_str(), m, sd, ref.r_hat[i], ref.effective_size[i], (a.mean - m) / sd,
+    std::printf("%-22s %14.6g %12.4g %7.4f %7.0f %8.3f | %9.3f %8.3f | %9.3f %8.3f | %9.3f\n",
+                ref.names[i].c_str(), m, sd, ref.r_hat[i], ref.effective_size[i],
+                ref.laplace_xi_stddev[i] / ref.xi_stddev[i], (a.mean - m) / sd,
                 a.stddev / sd, (b.mean - m) / sd, b.stddev / sd, (t - m) / sd);
     worst = std::max(worst, ref.r_hat[i]);
   }

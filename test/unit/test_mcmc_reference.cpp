@@ -1,7 +1,10 @@
 // Sampling reference posterior (mcmc_reference.h): the convergence diagnostics
 // on sequences with known answers, the sampler on posteriors in closed form
 // (Gaussian prior x linear-Gaussian likelihood; Beta(2,2) prior alone), then
-// the two-parameter speed-bump case against the grid posterior.
+// the two-parameter speed-bump case against the grid posterior; the ensemble
+// and Hamiltonian samplers on a 100:1 Gaussian ridge and on a linear model
+// whose two inputs trade off (the likelihood exactly Gaussian through the
+// model path).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -9,6 +12,7 @@
 #include <random>
 
 #include "pc_ekf/filter/mcmc_reference.h"
+#include "linear_forced_model.h"
 #include "linear_residual.h"
 #include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
@@ -132,6 +136,141 @@ TEST(McmcReference, BadInputIsRefusedWithItsName) {
   s.chains = 1;
   EXPECT_THROW(runMcmcReference(residual, prior, {Eigen::Vector2d::Zero()}, s),
                std::invalid_argument);
+  s.sampler = McmcSampler::kEnsemble;
+  s.chains = 5;  // odd
+  EXPECT_THROW(runMcmcReference(residual, prior, {Eigen::Vector2d::Zero()}, s),
+               std::invalid_argument);
+  s.chains = 2;  // fewer than 2 n walkers
+  EXPECT_THROW(runMcmcReference(residual, prior, {Eigen::Vector2d::Zero()}, s),
+               std::invalid_argument);
+}
+
+// Checks draws of a Gaussian posterior N(mean, cov) within Monte Carlo error:
+// the mean within 4 standard errors from the reported ESS; the std within 4
+// standard errors sd / sqrt(2 ESS2), ESS2 that of the squared deviations (a
+// Hamiltonian chain's ESS of the mean can exceed the draws, its ESS of the
+// variance does not); R-hat <= 1.01.
+void expectGaussian(const McmcReference& r, const Eigen::VectorXd& mean,
+                    const Eigen::MatrixXd& cov) {
+  const Eigen::Index chains = static_cast<Eigen::Index>(r.draws.size());
+  for (Eigen::Index i = 0; i < mean.size(); ++i) {
+    const double sd = std::sqrt(cov(i, i)), ess = r.effective_size[i];
+    Eigen::MatrixXd squared(chains, r.draws.front().cols());
+    for (Eigen::Index c = 0; c < chains; ++c)
+      squared.row(c) = (r.draws[c].row(i).array() - r.xi_mean[i]).square().matrix();
+    const double ess2 = effectiveSampleSize(squared);
+    EXPECT_NEAR(r.xi_mean[i], mean[i], 4.0 * sd / std::sqrt(ess)) << i;
+    EXPECT_NEAR(r.xi_stddev[i], sd, 4.0 * sd / std::sqrt(2.0 * ess2)) << i;
+    EXPECT_LE(r.r_hat[i], 1.01) << i;
+    EXPECT_GT(ess, 1000.0) << i;
+    EXPECT_GT(ess2, 500.0) << i;
+  }
+}
+
+// Ensemble: 32 walkers (8 n); Hamiltonian: 8 chains. Both well past ESS 1000.
+McmcSettings ridgeSettings(McmcSampler sampler) {
+  McmcSettings s;
+  s.sampler = sampler;
+  s.chains = sampler == McmcSampler::kEnsemble ? 32 : 8;
+  s.burn_in = sampler == McmcSampler::kEnsemble ? 1000 : 300;
+  s.samples = sampler == McmcSampler::kEnsemble ? 12000 : 2000;
+  return s;
+}
+
+TEST(McmcSamplers, RecoverA100To1RidgeInFourDimensions) {
+  // Prior N(0, I) times a likelihood N(mu, S), S with std 100 along u = (1, 1,
+  // 1, 1) / 2 and 0.01 across: the posterior N(P S^-1 mu, P), P = (I + S^-1)^-1,
+  // has std 0.99995 along u and 0.0099995 across (ratio 100.0), so every pair
+  // of coordinates is correlated 0.9996.
+  const Eigen::Vector4d u = Eigen::Vector4d::Constant(0.5);
+  const Eigen::Matrix4d across = Eigen::Matrix4d::Identity() - u * u.transpose();
+  const Eigen::Matrix4d s = 1e4 * u * u.transpose() + 1e-4 * across;
+  const Eigen::Vector4d mu(0.3, 0.31, 0.29, 0.3);
+  const LinearResidual residual(mu, s.llt().matrixL(), true);
+  // P and S^-1 share S's eigenvectors (a 4 x 4 inverse at condition 1e8 would not be exact).
+  const Eigen::Matrix4d p = u * u.transpose() / (1.0 + 1e-4) + across / (1.0 + 1e4);
+  const Eigen::Vector4d mean = p * (1e-4 * u * u.transpose() + 1e4 * across) * mu;
+  EXPECT_NEAR(std::sqrt(u.dot(p * u) / across.col(0).dot(p * across.col(0)) *
+                        across.col(0).squaredNorm()),
+              100.0, 1e-9);
+  for (const McmcSampler sampler : {McmcSampler::kEnsemble, McmcSampler::kHamiltonian}) {
+    McmcSettings settings = ridgeSettings(sampler);
+    const std::vector<GermSpec> prior(4, germ(GermFamily::kGaussian));
+    const McmcReference r = runMcmcReference(residual, prior, {Eigen::Vector4d::Zero()}, settings);
+    expectGaussian(r, mean, p);
+    // Correlation: its standard error (1 - rho^2) / sqrt(ESS).
+    const double rho = p(0, 1) / std::sqrt(p(0, 0) * p(1, 1));
+    const double rho_hat =
+        r.xi_covariance(0, 1) / std::sqrt(r.xi_covariance(0, 0) * r.xi_covariance(1, 1));
+    EXPECT_NEAR(rho, 0.9996, 1e-4);
+    EXPECT_NEAR(rho_hat, rho, 4.0 * (1.0 - rho * rho) / std::sqrt(r.effective_size.minCoeff()));
+    EXPECT_GT(r.acceptance, 0.2);
+    EXPECT_EQ(r.draws.size(), static_cast<std::size_t>(settings.chains));
+    std::printf("4-D ridge, %s: ESS %.0f-%.0f, R-hat <= %.4f, acceptance %.3f, correlation %.6f "
+                "(%.6f), %ld evaluations\n",
+                sampler == McmcSampler::kEnsemble ? "ensemble" : "Hamiltonian",
+                r.effective_size.minCoeff(), r.effective_size.maxCoeff(), r.r_hat.maxCoeff(),
+                r.acceptance, rho_hat, rho, r.simulations);
+  }
+}
+
+// A load and a scale the readings cannot tell apart, through ModelPosteriorResidual:
+// y' = A y + B theta with B's first two columns nearly equal, so only
+// theta0 + theta1 is read (their difference to 1e-3 of the data's weight);
+// the prior (Gaussian germs) closes the ridge. RK4 is affine in theta, so the
+// likelihood is exactly Gaussian in the germs: r(xi) = r0 + G xi, G found from
+// n + 1 evaluations, posterior N(-P G^T r0, P), P = (I + G^T G)^-1.
+TEST(McmcSamplers, LinearModelWithAScaleRidgeIsTheClosedForm) {
+  Eigen::MatrixXd a(2, 2), b(2, 3), c = Eigen::MatrixXd::Identity(2, 2);
+  a << 0.0, 1.0, -4.0, -0.4;
+  b << 0.0, 0.002, 0.3, 1.0, 1.0, -0.5;
+  const testing::LinearForcedModel model(a, b, c, Eigen::Vector3d(1.0, 1.0, 2.0));
+  const ParameterMapping mapping(model, {{"theta0", 1.0, 0.5, germ(GermFamily::kGaussian)},
+                                         {"theta1", 1.0, 0.5, germ(GermFamily::kGaussian)},
+                                         {"theta2", 2.0, 0.2, germ(GermFamily::kGaussian)}});
+  std::vector<double> times;
+  for (int k = 1; k <= 30; ++k) times.push_back(0.1 * k);
+  const IntegratorSettings integration{0.01};
+  const auto z = simulateChannels(
+      model, mapping.fullParameters(mapping.valuesAtGerms(Eigen::RowVector3d(0.4, -0.2, 0.3))),
+      times, integration);
+  std::mt19937_64 rng(17);
+  std::normal_distribution<double> normal;
+  MeasurementSeries series;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    series.push_back({times[k], {0, 1}, z[k].col(0).head(2)});
+    for (int j = 0; j < 2; ++j) series[k].values[j] += 0.01 * normal(rng);
+  }
+  const NoiseModel noise{0.0, 1e-4};  // R = 0.01^2 for every reading
+  const ModelPosteriorResidual residual(model, mapping, series, noise, integration, 1);
+  Eigen::MatrixXd units(3, 4);
+  units << 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1;
+  const Eigen::MatrixXd rs = residual.residuals(units);
+  const Eigen::MatrixXd g = rs.rightCols(3).colwise() - rs.col(0);
+  const Eigen::Matrix3d p = (Eigen::Matrix3d::Identity() + g.transpose() * g).inverse();
+  const Eigen::Vector3d mean = -p * g.transpose() * rs.col(0);
+  // The ridge: theta0 - theta1 is known to the prior's width only.
+  const Eigen::Vector3d along(1.0, -1.0, 0.0), sum(1.0, 1.0, 0.0);
+  EXPECT_GT(std::sqrt(along.dot(p * along) / sum.dot(p * sum)), 50.0);
+  for (const McmcSampler sampler : {McmcSampler::kEnsemble, McmcSampler::kHamiltonian}) {
+    McmcSettings settings;
+    settings.sampler = sampler;
+    settings.chains = sampler == McmcSampler::kEnsemble ? 16 : 8;
+    settings.burn_in = sampler == McmcSampler::kEnsemble ? 1000 : 200;
+    settings.samples = sampler == McmcSampler::kEnsemble ? 16000 : 1500;
+    const McmcReference r = runMcmcReference(model, mapping, series, noise, integration, 1,
+                                             {Eigen::Vector3d::Zero()}, settings);
+    std::printf(
+        "ridge, %s: mean %.4f %.4f %.4f (closed %.4f %.4f %.4f), std %.4f %.4f %.5f (closed "
+        "%.4f %.4f %.5f), ESS %.0f %.0f %.0f, R-hat %.4f, %ld simulations, %.1f s\n",
+        sampler == McmcSampler::kEnsemble ? "ensemble" : "Hamiltonian", r.xi_mean[0],
+        r.xi_mean[1], r.xi_mean[2], mean[0], mean[1], mean[2], r.xi_stddev[0], r.xi_stddev[1],
+        r.xi_stddev[2], std::sqrt(p(0, 0)), std::sqrt(p(1, 1)), std::sqrt(p(2, 2)),
+        r.effective_size[0], r.effective_size[1], r.effective_size[2], r.r_hat.maxCoeff(),
+        r.simulations, r.seconds);
+    expectGaussian(r, mean, p);
+    EXPECT_NEAR(r.mean[0], 1.0 + 0.5 * r.xi_mean[0], 1e-12);  // parameter units
+  }
 }
 
 // Speed bump, N = 10, 1 % relative noise (test_reference_posterior's case):

@@ -1,0 +1,80 @@
+// The samplers of runMcmcReference (mcmc_reference.h) beside its adaptive
+// Metropolis: an affine-invariant ensemble and Hamiltonian Monte Carlo.
+//
+// kEnsemble: Goodman & Weare's (2010) stretch move as in emcee
+// (Foreman-Mackey et al. 2013). The walkers are split in two halves; each
+// half moves against the other, so its proposals are one residual batch:
+//   y_j = x_c + z (x_j - x_c), x_c a random walker of the other half,
+//   z ~ g(z) ∝ 1/sqrt(z) on [1/a, a], accepted with min(1, z^(n-1) p(y_j) / p(x_j)).
+// The move commutes with any affine map of the parameters, so a narrow
+// straight ridge mixes like a round target, with no covariance to adapt.
+// R-hat and ESS are computed over the walkers as chains (splitRHat /
+// effectiveSampleSize: autocovariances averaged over walkers, emcee's
+// recommended estimator; the autocorrelation of the walker-averaged series is
+// far noisier at the same length). Walkers are not independent: each move
+// uses the other half's positions. With walkers >= 4 n that coupling is weak
+// once the ensemble is stationary, and a non-stationary ensemble still shows
+// as between-walker variance; the tests check that 4 standard errors from
+// this ESS cover known means.
+//
+// kHamiltonian: Hamiltonian Monte Carlo (Neal 2011) with forward-difference
+// gradients of F = 1/2 |r|^2 - log prior (the mode search's linearisation:
+// n + 1 simulations per leapfrog step, all chains in one batch). The inverse
+// mass matrix is the posterior covariance: the Laplace H^-1 at first, then
+// the pooled burn-in draws' covariance (as the adaptive Metropolis); the step
+// is steered to an acceptance of 0.8 during burn-in, then frozen. Leapfrog is
+// volume-preserving and reversible for any force that depends on position
+// only, so a finite-difference gradient leaves the draws exact. Trajectories
+// follow a curved ridge (a load traded against the body mass, its position
+// and the body's inertia at fixed total mass, CG and roll inertia), where
+// straight proposals from one covariance (adaptive Metropolis, ensemble) or
+// from the local Gauss-Newton metric (tried: step 0.04) are confined to a
+// short chord of it.
+#pragma once
+
+#include <Eigen/Dense>
+#include <functional>
+#include <random>
+#include <vector>
+
+#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/filter/posterior_prior.h"
+
+namespace pc_ekf {
+
+// Log posterior per column (-inf outside the support); one batch per call.
+using LogDensityBatch = std::function<Eigen::VectorXd(const Eigen::MatrixXd&)>;
+
+struct SamplerRun {
+  std::vector<Eigen::MatrixXd> draws;  // per chain or walker: n x (samples / thin)
+  double acceptance = 0.0;             // of the kept iterations
+  double scale = 0.0;                  // the stretch a, or the final leapfrog step
+};
+
+// Covariance of the pooled later half of the first `iterations` burn-in
+// draws (history: one n x burn_in matrix per chain), as both adaptive samplers
+// use it. False while fewer than 10 n draws are pooled or it is degenerate.
+bool burnInCovariance(const std::vector<Eigen::MatrixXd>& history, int iterations,
+                      Eigen::MatrixXd& cov);
+
+// Lower Cholesky factor of a covariance (or metric), with a relative ridge
+// when it is numerically singular. Throws std::runtime_error if that fails.
+Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov);
+
+// walkers: n x chains start positions, logp their (finite) log densities.
+// Runs settings.burn_in + settings.samples iterations (each moves every
+// walker once) and keeps every settings.thin-th after the burn-in.
+SamplerRun runStretchMove(const LogDensityBatch& log_density, Eigen::MatrixXd walkers,
+                          Eigen::VectorXd logp, const McmcSettings& settings, std::mt19937_64& rng,
+                          const PosteriorProgress& progress);
+
+// chains: n x chains start points inside the support with finite density;
+// covariance: the first metric (the Laplace H^-1). Runs settings.burn_in
+// (metric and step adapted every settings.adapt_every) + settings.samples
+// trajectories per chain, keeping every settings.thin-th.
+SamplerRun runHamiltonian(const PosteriorResidual& residual, const PriorDensity& prior,
+                          const Eigen::MatrixXd& chains, const Eigen::MatrixXd& covariance,
+                          const McmcSettings& settings, std::mt19937_64& rng,
+                          const PosteriorProgress& progress);
+
+}  // namespace pc_ekf
