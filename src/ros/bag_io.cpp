@@ -282,7 +282,8 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   std::vector<sensor_msgs::Imu::ConstPtr> imu_msgs;
   std::vector<std::string> topics;
   try {
-    record.road_topic = options.contacts.empty()
+    const bool road_free = options.road_free_interval > 0.0;
+    if (!road_free) record.road_topic = options.contacts.empty()
                             ? findTopic<RoadProfile>(path, bag, options.road_topic, &topics)
                             : findTopic<RoadHeights>(path, bag, options.road_heights_topic, &topics);
     record.joint_states_topic =
@@ -296,7 +297,7 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
       record.warnings.push_back("topic '" + older_truth + "' has another definition of "
                                 "pc_ekf/ParameterEstimate (an older bag): ground truth not read");
     }
-    if (record.road_topic.empty()) {
+    if (record.road_topic.empty() && !road_free) {
       throw BagError(path + ": no " +
                      (options.contacts.empty() ? "pc_ekf/RoadProfile" : "pc_ekf/RoadHeights") +
                      " messages on a topic ending in '" +
@@ -307,7 +308,9 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
       throw BagError(path + ": no sensor_msgs/JointState messages on a topic ending in '" +
                      options.joint_states_topic + "'; topics in the bag: " + join(topics));
     }
-    if (options.contacts.empty()) {
+    if (road_free) {
+      // No road: the samples alone define the record.
+    } else if (options.contacts.empty()) {
       road_msgs = readTopic<RoadProfile>(path, bag, record.road_topic);
     } else {
       heights_msgs = readTopic<RoadHeights>(path, bag, record.road_topic);
@@ -324,14 +327,23 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   } catch (const std::exception& e) {
     throw BagError(path + ": corrupt or truncated bag: " + e.what());
   }
-  if (road_msgs.empty() && heights_msgs.empty()) {
+  const bool road_free = options.road_free_interval > 0.0;
+  if (road_msgs.empty() && heights_msgs.empty() && !road_free) {
     throw BagError(path + ": topic '" + record.road_topic + "' has no messages");
   }
   if (joint_msgs.empty()) {
     throw BagError(path + ": topic '" + record.joint_states_topic +
                    "' has no messages (no samples)");
   }
-  if (options.contacts.empty()) {
+  if (road_free) {
+    ros::Time first = joint_msgs.front()->header.stamp;
+    for (const auto& js : joint_msgs) first = std::min(first, js->header.stamp);
+    try {
+      record.origin = stampAt(first, -options.road_free_interval);
+    } catch (const std::invalid_argument&) {
+      record.origin = ros::Time(0, 0);  // stamps near zero (sim time): t = stamp
+    }
+  } else if (options.contacts.empty()) {
     readTwoContactRoad(path, record, road_msgs);
   } else {
     readContactRoad(path, record, heights_msgs, options.contacts);
@@ -381,6 +393,7 @@ BagReadOptions bagReadOptions(const EstimatorConfig& config) {
   BagReadOptions o;
   o.imu = imuChannels(config.model_type->channelNames(), config.measurement.channels);
   o.imu_max_gap = config.node.imu_max_gap;
+  if (config.road.source == RoadSource::kNone) o.road_free_interval = config.sampling.interval();
   if (config.model_type->twoContacts()) return o;
   o.joints = suspensionJoints(*config.model_type, config.node.joint_names);
   o.contacts = config.model_type->contactNames();

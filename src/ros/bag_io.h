@@ -56,6 +56,10 @@ struct BagReadOptions {
   ImuChannels imu;
   std::string imu_topic = kImuTopic;
   double imu_max_gap = 0.1;  // s (node.imu_max_gap)
+  // Road-free (road.source none, > 0): no road is read, and t = 0 lies this
+  // long before the first joint_states stamp, as the node's (the config's
+  // sampling interval).
+  double road_free_interval = 0.0;
 };
 
 struct BagRecord {

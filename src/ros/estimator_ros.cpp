@@ -72,12 +72,15 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   joints_ = suspensionJoints(*config_.model_type, config_.node.joint_names);
   // Built now so that a bad road file or collocation design is a start-up error.
   if (config_.road.source == RoadSource::kNone) {
-    throw ConfigError(config_.source +
-                      ": key 'road.source': none (road-free) runs in estimate_offline, "
-                      "estimate_fleet and calibrate_vehicle; estimator_node needs a road "
-                      "(speed_bump, series, profile, course or topic) for now");
-  }
-  if (config_.road.source == RoadSource::kTopic) {
+    if (config_.safeguards.relinearize.defer > 0.0) {
+      throw ConfigError(config_.source +
+                        ": key 'filter.relinearize.defer': road.source none re-linearises on "
+                        "the node's thread (a deferred re-run would read inputs the node is "
+                        "appending to); set it to 0");
+    }
+    startRoadFree();
+    prior_propagator_ = analytic_propagator_;
+  } else if (config_.road.source == RoadSource::kTopic) {
     prior_propagator_ =
         makePropagator(config_, makeModel(config_, std::make_shared<SampledRoad>(
                                                        timelineSettings(config_).contacts)));
@@ -90,6 +93,10 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
                            prior_propagator_->parameterCount());
   }
   readCheckpointParams(pnh_, checkpoint_file_, checkpoint_every_);
+  if (road_free_ && !checkpoint_file_.empty()) {
+    throw ConfigError(pnh_.resolveName(kCheckpointFileParam) +
+                      ": checkpoints do not hold road-free inputs (road.source none); unset it");
+  }
   // Before any subscription: no callback may see the prior state.
   if (!checkpoint_file_.empty()) {
     resumeFromCheckpoint();
@@ -178,9 +185,15 @@ void EstimatorRos::logStartSensitivity() {
   if (!s.note.empty()) ROS_WARN("%s: %s", name_.c_str(), s.note.c_str());
 }
 
+void EstimatorRos::startRoadFree() {
+  road_free_ = std::make_unique<RoadFreeStream>(config_, RoadFreeStream::inputsFor(config_));
+  analytic_propagator_ = makePropagator(config_, road_free_->model());
+}
+
 void EstimatorRos::startRun() {
   timeline_.reset();
   run_.reset();
+  if (road_free_) startRoadFree();  // the inputs start again with the run
   // A restart must not resume the run that was just abandoned: no write of
   // it may still be waiting or running when the file goes.
   if (checkpoint_writer_) {
@@ -466,7 +479,9 @@ void EstimatorRos::updateRunState() {
     std::snprintf(text, sizeof(text), "%u.%09u", o->sec, o->nsec);
     origin = text;
   }
-  diagnostics_.setRunState(toString(timeline_.mode()), origin, timeline_.pendingCount(),
+  const char* road = road_free_ ? "none (road-free: the suspension readings drive the body)"
+                               : toString(timeline_.mode());
+  diagnostics_.setRunState(road, origin, timeline_.pendingCount(),
                            timeline_.roadCount());
 }
 
@@ -495,9 +510,17 @@ void EstimatorRos::process(const ReleasedSample& sample) {
                       name_.c_str(), sample.measurement.time, config_.node.road_wait_timeout);
   }
   const double start = steadySeconds();
+  Measurement outputs;
+  if (road_free_) {
+    const std::string problem = road_free_->add(sample.measurement, &outputs);
+    if (!problem.empty()) {
+      rejectSample("road_free_input", problem);
+      return;
+    }
+  }
   SampleEstimate e;
   try {
-    e = run_->process(sample.measurement, sample.stamp);
+    e = run_->process(road_free_ ? outputs : sample.measurement, sample.stamp);
   } catch (const std::invalid_argument& err) {  // checked before; the filter has the last word
     rejectSample("filter_refused", err.what());
     return;

@@ -26,6 +26,7 @@
 #include "pc_ekf/filter/pc_propagator.h"
 #include "pc_ekf/io/background_writer.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/io/start_sensitivity.h"
 #include "pc_ekf/ros/estimator_diagnostics.h"
 #include "pc_ekf/ros/estimator_run.h"
@@ -73,6 +74,7 @@ class EstimatorRos {
   void processReleased();
   void process(const ReleasedSample& sample);
   void startRun();
+  void startRoadFree();
   void rejectSample(const std::string& reason, const std::string& detail);
   void updateRunState();
   // The filters' propagator for the current road mode (topic: the timeline's road).
@@ -94,6 +96,9 @@ class EstimatorRos {
   std::shared_ptr<const PcPropagator> prior_propagator_;     // for the prior message
   std::shared_ptr<const ParameterPdfSampler> pdfs_;          // null: no parameter_pdf
   EstimatorTimeline timeline_;
+  // road.source none: the run's inputs (suspension readings, gyro) and the
+  // model they drive, renewed with every run (startRun).
+  std::unique_ptr<RoadFreeStream> road_free_;
   std::unique_ptr<ImuInput> imu_;  // null: measurement.channels select no IMU channel
   std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
   std::unique_ptr<PdfWorker> pdf_worker_;  // null: no parameter_pdf

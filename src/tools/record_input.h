@@ -35,7 +35,9 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
     if (record.warnings.size() > 5) {
       std::cerr << "[bag] ... and " << record.warnings.size() - 5 << " more warnings\n";
     }
-    bag_road = std::make_shared<SampledRoad>(record.road_contacts.t, record.road_contacts.heights);
+    if (config.road.source != RoadSource::kNone) {
+      bag_road = std::make_shared<SampledRoad>(record.road_contacts.t, record.road_contacts.heights);
+    }
     r.series = std::move(record.samples);
   }
   const bool road_free = config.road.source == RoadSource::kNone;
