@@ -84,6 +84,9 @@ pc_ekf_log "running the node end to end"
 bash "$here/lib/bench_node.sh" "$bin" "$out/node" || pc_ekf_log "node benchmark failed"
 pc_ekf_log "running the n = 11 node at 1 kHz in real time"
 bash "$here/lib/bench_node.sh" "$bin" "$out/node_n11" n11 || pc_ekf_log "n = 11 node benchmark failed"
+pc_ekf_log "running the road-free node (vehicle_imu.yaml) at 1 kHz"
+bash "$here/lib/bench_node.sh" "$bin" "$out/node_road_free" road_free ||
+  pc_ekf_log "road-free node benchmark failed"
 pc_ekf_log "running estimate_offline end to end"
 rm -rf "$out/end_to_end"
 bash "$here/lib/bench_end_to_end.sh" "$PC_EKF_WS/devel/lib/pc_ekf" "$out/end_to_end" ||

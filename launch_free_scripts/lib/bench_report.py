@@ -63,6 +63,8 @@ def load_json(path, missing):
 node = load_json(out / "node" / "node.json",
                  {"node_samples_per_s": None, "node_peak_rss_mb": None, "reason": "no node.json"})
 node_n11 = load_json(out / "node_n11" / "node.json", {"reason": "no node_n11/node.json"})
+node_road_free = load_json(out / "node_road_free" / "node.json",
+                           {"reason": "no node_road_free/node.json"})
 end_to_end = load_json(out / "end_to_end" / "end_to_end.json", {"reason": "no end_to_end.json"})
 
 
@@ -122,6 +124,8 @@ result = {
     # end (best of 3), the n = 11 node at 1 kHz in real time, the PDFs.
     "rtf_n11_end_to_end": end_to_end.get("rtf_n11_end_to_end"),
     "road_free_rtf_end_to_end": end_to_end.get("road_free_rtf_end_to_end"),
+    "road_free_node_lost": node_road_free.get("node_samples_lost"),
+    "road_free_node_max_lag_ms": node_road_free.get("node_max_lag_ms"),
     "node_n11_1khz_lost": node_n11.get("node_samples_lost"),
     "node_n11_1khz_max_lag_ms": node_n11.get("node_max_lag_ms"),
     # Wall time per call (all 11 parameters' histograms), best repetition.
@@ -166,6 +170,7 @@ details = {
     "reference_posterior_case_b": posterior.get(post, {}),
     "node": node,
     "node_n11": node_n11,
+    "node_road_free": node_road_free,
     "end_to_end": end_to_end,
     "pdf": [{c: b.get(c) for c in ("name", "real_time", "cpu_time", "time_unit", "iterations")}
             for b in repetitions("bench_pdf", "")],
@@ -325,6 +330,10 @@ row("rtf_n8 (p = 2, Q = 2S = 90 Halton, 2 threads; process() only: no start-up, 
 row("road_free_rtf_end_to_end (estimate_offline, vehicle_imu.yaml on a 10 s, 200 Hz CSV, best of 3)",
     fmt(result["road_free_rtf_end_to_end"], "x"), ">= 30x",
     cmp(result["road_free_rtf_end_to_end"], ">=", 30))
+row("road_free_node_lost (estimator_node, vehicle_imu.yaml, its 10 s bag by rosbag play -r 5)",
+    fmt(result["road_free_node_lost"]), "0", cmp(result["road_free_node_lost"], "<=", 0))
+row("road_free_node_max_lag_ms", fmt(result["road_free_node_max_lag_ms"], " ms"), "<= 50 ms",
+    cmp(result["road_free_node_max_lag_ms"], "<=", 50))
 row("rtf_n11_end_to_end (whole estimate_offline --method one_step, n = 11, best of 3)",
     fmt(result["rtf_n11_end_to_end"], "x"), ">= 30x", cmp(result["rtf_n11_end_to_end"], ">=", 30))
 row("full_car_tolerances_rtf (whole estimate_offline, full car n = 12, dt = 30 ms)",

@@ -80,10 +80,10 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     accel_z_sum_ += o.values[static_cast<Eigen::Index>(j)];
     ++accel_z_count_;
   }
-  // The inherited variance from the inputs so far, renewed at 1, 2, 4, ...
-  // samples: a stream's cost stays linear, and early samples are not
-  // weighed by a statistic of readings not yet taken.
+  // The sample's own inherited variance; the load it is weighed at (tare)
+  // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
+  inherited_ = inherited_at_(static_cast<std::size_t>(samples_ - 1));
   o.extra_variances.resize(o.values.size());
   for (std::size_t j = 0; j < o.channels.size(); ++j) {
     o.extra_variances[static_cast<Eigen::Index>(j)] = inherited_[o.channels[j]];
@@ -94,7 +94,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
 
 void RoadFreeStream::updateInputNoise() {
   const double mean_accel_z = accel_z_count_ > 0 ? accel_z_sum_ / static_cast<double>(accel_z_count_) : 0.0;
-  inherited_ = model_->inputNoiseVariance(absolute_, relative_, mean_accel_z);
+  inherited_at_ = model_->inputNoiseBySample(absolute_, relative_, mean_accel_z);
 }
 
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {

@@ -36,8 +36,8 @@ class RoadFreeStream {
   const std::vector<int>& outputChannels() const { return outputs_; }
 
   // Appends m's inputs and writes its outputs to `out`, each with the
-  // variance it inherits from the inputs' noise (Measurement::
-  // extra_variances). Returns "" or why the sample was refused (an input not
+  // variance it inherits from the noise of this sample's inputs
+  // (Measurement::extra_variances). Returns "" or why the sample was refused (an input not
   // read yet, a time not after the last); then nothing changes.
   std::string add(const Measurement& m, Measurement* out);
 
@@ -54,6 +54,7 @@ class RoadFreeStream {
   double accel_z_sum_ = 0.0;
   long accel_z_count_ = 0;
   long samples_ = 0;
+  MechanicalModel::SampleInputNoise inherited_at_;
   Eigen::VectorXd inherited_;  // per model channel
 };
 

@@ -198,12 +198,12 @@ std::unique_ptr<ModelBatch> FullCarRoadFreeModel::prepare(const Eigen::MatrixXd&
   return std::make_unique<FullCarRoadFreeBatch>(constants(params), inputs_);
 }
 
-Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
+MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const Eigen::VectorXd& absolute,
                                                          const Eigen::VectorXd& relative,
                                                          double mean_accel_z) const {
   const int n = inputs_->count();
   if (absolute.size() != n || relative.size() != n) {
-    throw std::invalid_argument("inputNoiseVariance: one std per input");
+    throw std::invalid_argument("inputNoiseBySample: one std per input");
   }
   Eigen::VectorXd vehicle = nominal_vector_;
   if (zero_ == ZeroConvention::kTare) {  // the load the record weighs
@@ -222,21 +222,33 @@ Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& 
     vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[body],
                                  4.0 * std::max(vehicle[added], vehicle[body]), vehicle[added]);
   }
-  const auto c = constants(Eigen::MatrixXd(vehicle));
-  const auto& p = c->points.front();
+  std::shared_ptr<const FullCarRoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
   const bool gyros = n > kGyroY;
   const std::vector<int> integrated = gyros ? std::vector<int>{kGyroX, kGyroY} : std::vector<int>{};
-  const Eigen::VectorXd v = inputOutputVariance(
-      *inputs_, absolute, relative, integrated, 4,
-      [&](const double* now, const double* before, bool at_rest, double dt, const double* angle,
-          double* out) {
-        const double gyro_before[2] = {gyros ? before[kGyroX] : 0.0, gyros ? before[kGyroY] : 0.0};
-        outputs(*c, p, now, before, at_rest, dt, gyros ? angle[0] : 0.0, gyros ? -angle[1] : 0.0,
-                gyro_before, out);
-      });
-  Eigen::VectorXd variance = Eigen::VectorXd::Zero(12);
-  variance.tail(4) = v;
-  return variance;
+  return [c, integrated, absolute, relative, gyros, inputs = inputs_](std::size_t k) {
+    const auto& p = c->points.front();
+    const Eigen::VectorXd v = inputOutputVarianceAt(
+        *inputs, k, absolute, relative, integrated, 4,
+        [&](const double* now, const double* before, bool at_rest, double dt, const double* angle,
+            double* out) {
+          const double gyro_before[2] = {gyros ? before[kGyroX] : 0.0, gyros ? before[kGyroY] : 0.0};
+          outputs(*c, p, now, before, at_rest, dt, gyros ? angle[0] : 0.0, gyros ? -angle[1] : 0.0,
+                  gyro_before, out);
+        });
+    Eigen::VectorXd variance = Eigen::VectorXd::Zero(12);
+    variance.tail(4) = v;
+    return variance;
+  };
+}
+
+Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
+                                       const Eigen::VectorXd& relative,
+                                       double mean_accel_z) const {
+  const SampleInputNoise at = inputNoiseBySample(absolute, relative, mean_accel_z);
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(12);
+  const std::size_t samples = inputs_->times().size();
+  for (std::size_t k = 0; k < samples; ++k) sum += at(k);
+  return sum / static_cast<double>(std::max<std::size_t>(samples, 1));
 }
 
 }  // namespace pc_ekf

@@ -48,6 +48,9 @@ class FullCarRoadFreeModel : public MechanicalModel {
   std::vector<double> breakpoints(double, double) const override { return {}; }
 
   // As RollPlaneRoadFreeModel::inputNoiseVariance (per model channel).
+  SampleInputNoise inputNoiseBySample(const Eigen::VectorXd& absolute,
+                                      const Eigen::VectorXd& relative,
+                                      double mean_accel_z) const override;
   Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& absolute,
                                      const Eigen::VectorXd& relative,
                                      double mean_accel_z) const override;

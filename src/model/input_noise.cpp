@@ -5,53 +5,51 @@
 
 namespace pc_ekf {
 
-Eigen::VectorXd inputOutputVariance(const ReadingInputs& inputs, const Eigen::VectorXd& absolute,
-                                    const Eigen::VectorXd& relative,
-                                    const std::vector<int>& integrated, int outputs,
-                                    const ReadingOutputs& evaluate) {
+Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k,
+                                      const Eigen::VectorXd& absolute,
+                                      const Eigen::VectorXd& relative,
+                                      const std::vector<int>& integrated, int outputs,
+                                      const ReadingOutputs& evaluate) {
   const int n = inputs.count();
   const int m = static_cast<int>(integrated.size());
   const std::vector<double>& t = inputs.times();
-  const double duration = t.back();
   std::vector<double> now0(static_cast<std::size_t>(n)), before0(now0.size()), now(now0.size()),
       before(now0.size()), attitude(static_cast<std::size_t>(std::max(m, 1)));
   std::vector<double> plus(static_cast<std::size_t>(outputs)), minus(plus.size());
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(outputs);
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    const bool at_rest = k == 0;
-    const double dt = t[k] - (at_rest ? 0.0 : t[k - 1]);
-    inputs.at(t[k], now0.data());
-    std::fill(before0.begin(), before0.end(), 0.0);
-    if (!at_rest) inputs.at(t[k - 1], before0.data());
-    for (int which = 0; which < 2 * n + m; ++which) {
-      const bool angle = which >= 2 * n;
-      const int i = angle ? integrated[static_cast<std::size_t>(which - 2 * n)] : which % n;
-      if (!angle && which >= n && at_rest) continue;  // nothing read before the first sample
-      const double reading = which < n ? now0[i] : before0[i];
-      const double step = angle ? absolute[i] * std::sqrt(dt * duration)
-                                : std::hypot(absolute[i], relative[i] * reading);
-      if (!(step > 0.0)) continue;
-      for (const int sign : {1, -1}) {
-        now = now0;
-        before = before0;
-        std::fill(attitude.begin(), attitude.end(), 0.0);
-        if (angle) {
-          attitude[static_cast<std::size_t>(which - 2 * n)] = sign * step;
-        } else if (which < n) {
-          now[static_cast<std::size_t>(i)] += sign * step;
-        } else {
-          before[static_cast<std::size_t>(i)] += sign * step;
-        }
-        evaluate(now.data(), before.data(), at_rest, dt, attitude.data(),
-                 sign > 0 ? plus.data() : minus.data());
+  const bool at_rest = k == 0;
+  const double dt = t[k] - (at_rest ? 0.0 : t[k - 1]);
+  inputs.at(t[k], now0.data());
+  std::fill(before0.begin(), before0.end(), 0.0);
+  if (!at_rest) inputs.at(t[k - 1], before0.data());
+  for (int which = 0; which < 2 * n + m; ++which) {
+    const bool angle = which >= 2 * n;
+    const int i = angle ? integrated[static_cast<std::size_t>(which - 2 * n)] : which % n;
+    if (!angle && which >= n && at_rest) continue;  // nothing read before the first sample
+    const double reading = which < n ? now0[i] : before0[i];
+    const double step = angle ? absolute[i] * std::sqrt(dt * t[k])
+                              : std::hypot(absolute[i], relative[i] * reading);
+    if (!(step > 0.0)) continue;
+    for (const int sign : {1, -1}) {
+      now = now0;
+      before = before0;
+      std::fill(attitude.begin(), attitude.end(), 0.0);
+      if (angle) {
+        attitude[static_cast<std::size_t>(which - 2 * n)] = sign * step;
+      } else if (which < n) {
+        now[static_cast<std::size_t>(i)] += sign * step;
+      } else {
+        before[static_cast<std::size_t>(i)] += sign * step;
       }
-      for (int r = 0; r < outputs; ++r) {
-        const double d = 0.5 * (plus[r] - minus[r]);  // derivative times std
-        variance[r] += d * d;
-      }
+      evaluate(now.data(), before.data(), at_rest, dt, attitude.data(),
+               sign > 0 ? plus.data() : minus.data());
+    }
+    for (int r = 0; r < outputs; ++r) {
+      const double d = 0.5 * (plus[r] - minus[r]);  // derivative times std
+      variance[r] += d * d;
     }
   }
-  return variance / static_cast<double>(t.size());
+  return variance;
 }
 
 double weighedLoad(const ReadingInputs& inputs, const std::function<double(const double*)>& spring_force,

@@ -18,16 +18,17 @@ namespace pc_ekf {
 using ReadingOutputs = std::function<void(const double* now, const double* before, bool at_rest,
                                           double dt, const double* attitude, double* out)>;
 
-// For every sample of `inputs`: each input now and at the previous sample
-// perturbed by its noise there, hypot(absolute, relative * reading), and
-// each integrated input (e.g. a gyro's angle) by absolute * sqrt(dt * T) (T
-// the record's length), one at a time (central differences; the noise of
-// "now" and "before" independent). Returns, per output, the mean over the
-// samples of the sum of the squared changes.
-Eigen::VectorXd inputOutputVariance(const ReadingInputs& inputs, const Eigen::VectorXd& absolute,
-                                    const Eigen::VectorXd& relative,
-                                    const std::vector<int>& integrated, int outputs,
-                                    const ReadingOutputs& evaluate);
+// At sample k of `inputs`: each input at k and at k - 1 perturbed by its
+// noise there, hypot(absolute, relative * reading), and each integrated
+// input (e.g. a gyro's angle) by absolute * sqrt(dt * t_k) (the random walk
+// of its integral up to t_k), one at a time (central differences; the noise
+// of "now" and "before" independent). Returns, per output, the sum of the
+// squared changes.
+Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k,
+                                      const Eigen::VectorXd& absolute,
+                                      const Eigen::VectorXd& relative,
+                                      const std::vector<int>& integrated, int outputs,
+                                      const ReadingOutputs& evaluate);
 
 // The load a tare record weighs: the springs' mean force (`spring_force` of
 // the inputs at a sample) over the record's mean accel_z, less the body

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -89,7 +90,16 @@ class MechanicalModel {
   // Road-free models: per model channel, the variance a predicted reading
   // inherits from the noise of the input readings (errors in variables); an
   // input's noise std is hypot(absolute, relative * reading), one entry per
-  // input; mean_accel_z the record's (0: unknown). Empty for other models.
+  // input; mean_accel_z the record's (0: unknown). By sample (the sample's
+  // own inputs, those before it for the gyro's angle): a function of the
+  // sample index, prepared once (the load weighed by the inputs so far).
+  // Null for other models. inputNoiseVariance: its mean over the samples.
+  using SampleInputNoise = std::function<Eigen::VectorXd(std::size_t sample)>;
+  virtual SampleInputNoise inputNoiseBySample(const Eigen::VectorXd& /*absolute*/,
+                                              const Eigen::VectorXd& /*relative*/,
+                                              double /*mean_accel_z*/) const {
+    return nullptr;
+  }
   virtual Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& /*absolute*/,
                                              const Eigen::VectorXd& /*relative*/,
                                              double /*mean_accel_z*/) const {

@@ -185,12 +185,12 @@ std::unique_ptr<ModelBatch> RollPlaneRoadFreeModel::prepare(const Eigen::MatrixX
   return std::make_unique<RoadFreeBatch>(constants(params), inputs_);
 }
 
-Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
+MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(const Eigen::VectorXd& absolute,
                                                            const Eigen::VectorXd& relative,
                                                            double mean_accel_z) const {
   const int n = inputs_->count();
   if (absolute.size() != n || relative.size() != n) {
-    throw std::invalid_argument("inputNoiseVariance: one std per input");
+    throw std::invalid_argument("inputNoiseBySample: one std per input");
   }
   Eigen::VectorXd vehicle = nominal_vector_;
   // With tare the record weighs the load (the derivatives scale with 1 / (m + M)).
@@ -210,20 +210,32 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
     vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[m],
                                  4.0 * std::max(vehicle[added], vehicle[m]), vehicle[added]);
   }
-  const auto c = constants(Eigen::MatrixXd(vehicle));
-  const RoadFreeConstants::Point& p = c->points.front();
+  std::shared_ptr<const RoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
   const std::vector<int> integrated = n > kGyro ? std::vector<int>{kGyro} : std::vector<int>{};
-  const Eigen::VectorXd v = inputOutputVariance(
-      *inputs_, absolute, relative, integrated, 3,
-      [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
-          double* out) {
-        const double gyro_before = n > kGyro ? before[kGyro] : 0.0;
-        outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
-                gyro_before, out);
-      });
-  Eigen::VectorXd variance = Eigen::VectorXd::Zero(7);
-  variance.tail(3) = v;
-  return variance;
+  return [c, integrated, absolute, relative, n, inputs = inputs_](std::size_t k) {
+    const RoadFreeConstants::Point& p = c->points.front();
+    const Eigen::VectorXd v = inputOutputVarianceAt(
+        *inputs, k, absolute, relative, integrated, 3,
+        [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
+            double* out) {
+          const double gyro_before = n > kGyro ? before[kGyro] : 0.0;
+          outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
+                  gyro_before, out);
+        });
+    Eigen::VectorXd variance = Eigen::VectorXd::Zero(7);
+    variance.tail(3) = v;
+    return variance;
+  };
+}
+
+Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
+                                       const Eigen::VectorXd& relative,
+                                       double mean_accel_z) const {
+  const SampleInputNoise at = inputNoiseBySample(absolute, relative, mean_accel_z);
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(7);
+  const std::size_t samples = inputs_->times().size();
+  for (std::size_t k = 0; k < samples; ++k) sum += at(k);
+  return sum / static_cast<double>(std::max<std::size_t>(samples, 1));
 }
 
 }  // namespace pc_ekf

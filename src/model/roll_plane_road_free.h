@@ -54,6 +54,9 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
   // are taken at the nominal vehicle; with tare and mean_accel_z > 0 (the
   // record's mean accel_z) at the load the record weighs: the springs' mean
   // force over mean_accel_z, less the body mass.
+  SampleInputNoise inputNoiseBySample(const Eigen::VectorXd& absolute,
+                                      const Eigen::VectorXd& relative,
+                                      double mean_accel_z) const override;
   Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& absolute,
                                      const Eigen::VectorXd& relative,
                                      double mean_accel_z) const override;

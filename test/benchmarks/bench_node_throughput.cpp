@@ -5,9 +5,10 @@
 //   ~expect (int)     estimates to wait for
 //   ~timeout (s)      give up after this long without a new estimate (default 60)
 //   ~ready (path)     touched once the estimator's publisher is connected
+//   ~rate (x)         the replay's rate (default 1): stamps advance 1/rate as fast
 // Prints one JSON object: received, first_to_last_s, samples_per_s and
-// max_lag_ms: with a real-time replay (rate 1) each estimate's delay is its
-// arrival (wall) minus its sample stamp; max_lag_ms is the largest delay
+// max_lag_ms: each estimate's delay is its arrival (wall) minus its sample
+// stamp (divided by ~rate: the replay's wall time of the stamp); max_lag_ms is the largest delay
 // minus the smallest, i.e. how far the estimator fell behind its best case
 // (the fixed offset between the bag's stamps and the wall clock cancels).
 #include <pc_ekf/ParameterEstimate.h>
@@ -27,11 +28,12 @@ struct Counter {
   long received = 0;
   Clock::time_point first, last;
   double min_delay = 1e300, max_delay = -1e300;
+  double rate = 1.0;
   void onEstimate(const pc_ekf::ParameterEstimate::ConstPtr& msg) {
     last = Clock::now();
     if (received++ == 0) first = last;
     const double delay =
-        std::chrono::duration<double>(last.time_since_epoch()).count() - msg->header.stamp.toSec();
+        std::chrono::duration<double>(last.time_since_epoch()).count() - msg->header.stamp.toSec() / rate;
     min_delay = std::min(min_delay, delay);
     max_delay = std::max(max_delay, delay);
   }
@@ -49,6 +51,7 @@ int main(int argc, char** argv) {
   pnh.getParam("timeout", timeout);
   pnh.getParam("ready", ready);
   Counter counter;
+  pnh.getParam("rate", counter.rate);
   ros::Subscriber sub = nh.subscribe("parameter_estimate", 200000, &Counter::onEstimate, &counter,
                                      ros::TransportHints().tcpNoDelay());
   bool announced = false;

@@ -1,7 +1,7 @@
 // Road-free estimation on a stream (road.source none): a record is split
 // into inputs and predicted readings sample by sample; each reading carries
-// the variance it inherits from the inputs' noise, renewed over the inputs
-// so far at 1, 2, 4, ... samples (what a live node knows at that sample).
+// the variance it inherits from the noise of that sample's inputs (tare: at
+// the load the samples so far weigh, renewed at 1, 2, 4, ... samples).
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -22,7 +22,7 @@ EstimatorConfig imuConfig(int samples, double duration) {
   return parseConfig(root, "vehicle_imu.yaml");
 }
 
-TEST(RoadFreeStream, InheritedVarianceIsThePrefixsRenewedAtPowersOfTwo) {
+TEST(RoadFreeStream, InheritedVarianceIsTheSamplesOwn) {
   const EstimatorConfig c = imuConfig(40, 0.2);
   const MeasurementSeries record = synthesizeFromConfig(c, *truthOnItsRoad(c), 7);
   const RoadFreeRecord split = roadFreeRecord(c, record);
@@ -32,41 +32,42 @@ TEST(RoadFreeStream, InheritedVarianceIsThePrefixsRenewedAtPowersOfTwo) {
   // Outputs: accel_y accel_z gyro_x (the gyro is both: its increments are predicted).
   EXPECT_EQ(split.outputs[0].channels, (std::vector<int>{4, 5, 6}));
 
-  // Sample 16 (a power of two) against the model built on the first 16 samples.
-  const int k = 16;
-  std::vector<double> times;
-  std::vector<std::vector<double>> columns(inputs.size());
-  double accel_z = 0.0;
-  for (int s = 0; s < k; ++s) {
-    const Measurement& m = record[static_cast<std::size_t>(s)];
-    times.push_back(m.time);
-    for (std::size_t i = 0; i < inputs.size(); ++i) {
-      const int ch = c.model_type->description().channelIndex(inputs[i]);
-      for (std::size_t j = 0; j < m.channels.size(); ++j) {
-        if (m.channels[j] == ch) columns[i].push_back(m.values[static_cast<Eigen::Index>(j)]);
-      }
-    }
-    for (std::size_t j = 0; j < m.channels.size(); ++j) {
-      if (m.channels[j] == 5) accel_z += m.values[static_cast<Eigen::Index>(j)];
-    }
-  }
-  const auto prefix = std::make_shared<const ReadingInputs>(inputs, times, columns);
-  const auto model = c.model_type->buildRoadFree(*c.modelParameters(), prefix, c.measurement.zero);
+  // Samples 16 and 32 (the load weighed anew) against the model built on
+  // the samples up to them: the sample's own variance.
   const Eigen::VectorXd abs_std = (Eigen::VectorXd(5) << 5e-4, 5e-4, 5e-3, 5e-3, 0.002).finished();
   const Eigen::VectorXd rel = (Eigen::VectorXd(5) << 0.01, 0.01, 0.01, 0.01, 0.0).finished();
-  const Eigen::VectorXd expected = model->inputNoiseVariance(abs_std, rel, accel_z / k);
-  for (int s : {k - 1, k, 2 * k - 2}) {  // sample 16, then held until sample 32
-    const Measurement& out = split.outputs[static_cast<std::size_t>(s)];
+  for (int k : {16, 32}) {
+    std::vector<double> times;
+    std::vector<std::vector<double>> columns(inputs.size());
+    double accel_z = 0.0;
+    for (int s = 0; s < k; ++s) {
+      const Measurement& m = record[static_cast<std::size_t>(s)];
+      times.push_back(m.time);
+      for (std::size_t i = 0; i < inputs.size(); ++i) {
+        const int ch = c.model_type->description().channelIndex(inputs[i]);
+        for (std::size_t j = 0; j < m.channels.size(); ++j) {
+          if (m.channels[j] == ch) columns[i].push_back(m.values[static_cast<Eigen::Index>(j)]);
+        }
+      }
+      for (std::size_t j = 0; j < m.channels.size(); ++j) {
+        if (m.channels[j] == 5) accel_z += m.values[static_cast<Eigen::Index>(j)];
+      }
+    }
+    const auto prefix = std::make_shared<const ReadingInputs>(inputs, times, columns);
+    const auto model = c.model_type->buildRoadFree(*c.modelParameters(), prefix, c.measurement.zero);
+    const Eigen::VectorXd expected =
+        model->inputNoiseBySample(abs_std, rel, accel_z / k)(static_cast<std::size_t>(k - 1));
+    const Measurement& out = split.outputs[static_cast<std::size_t>(k - 1)];
     ASSERT_EQ(out.extra_variances.size(), 3);
     for (int j = 0; j < 3; ++j) {
       EXPECT_NEAR(out.extra_variances[j], expected[out.channels[static_cast<std::size_t>(j)]],
                   1e-12 * expected.maxCoeff())
-          << "sample " << s + 1 << " output " << j;
+          << "sample " << k << " output " << j;
     }
+    EXPECT_GT(expected.maxCoeff(), 0.0);
   }
-  // Renewed at sample 32: the gyro's angle error grows with the record.
-  EXPECT_GT(split.outputs[31].extra_variances[0], 0.0);
-  EXPECT_NE(split.outputs[31].extra_variances[2], split.outputs[30].extra_variances[2]);
+  // Each sample its own: the gyro's angle error grows along the record.
+  EXPECT_LT(split.outputs[20].extra_variances[0], split.outputs[39].extra_variances[0]);
 }
 
 TEST(RoadFreeStream, RefusesSamplesByName) {
