@@ -242,13 +242,10 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
 }
 
 Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
-                                       const Eigen::VectorXd& relative,
-                                       double mean_accel_z) const {
-  const SampleInputNoise at = inputNoiseBySample(absolute, relative, mean_accel_z);
-  Eigen::VectorXd sum = Eigen::VectorXd::Zero(12);
-  const std::size_t samples = inputs_->times().size();
-  for (std::size_t k = 0; k < samples; ++k) sum += at(k);
-  return sum / static_cast<double>(std::max<std::size_t>(samples, 1));
+                                         const Eigen::VectorXd& relative,
+                                         double mean_accel_z) const {
+  return meanOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
+                         inputs_->times().size(), 12);
 }
 
 }  // namespace pc_ekf

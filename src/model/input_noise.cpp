@@ -52,6 +52,13 @@ Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k
   return variance;
 }
 
+Eigen::VectorXd meanOverSamples(const std::function<Eigen::VectorXd(std::size_t)>& at,
+                                std::size_t samples, int channels) {
+  Eigen::VectorXd sum = Eigen::VectorXd::Zero(channels);
+  for (std::size_t k = 0; k < samples; ++k) sum += at(k);
+  return sum / static_cast<double>(std::max<std::size_t>(samples, 1));
+}
+
 double weighedLoad(const ReadingInputs& inputs, const std::function<double(const double*)>& spring_force,
                    double mean_accel_z, double body_mass, double limit, double fallback) {
   if (!(mean_accel_z > 0.0)) return fallback;

@@ -30,6 +30,10 @@ Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k
                                       const std::vector<int>& integrated, int outputs,
                                       const ReadingOutputs& evaluate);
 
+// The mean of `at` (per model channel, `channels` long) over samples 0..n-1.
+Eigen::VectorXd meanOverSamples(const std::function<Eigen::VectorXd(std::size_t)>& at,
+                                std::size_t samples, int channels);
+
 // The load a tare record weighs: the springs' mean force (`spring_force` of
 // the inputs at a sample) over the record's mean accel_z, less the body
 // mass, clamped to [0, limit]; `fallback` when it cannot be told.

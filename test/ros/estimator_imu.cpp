@@ -15,6 +15,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "offline_comparison.h"
 #include "replay_test_support.h"
 
 namespace pc_ekf::test {
@@ -24,38 +25,6 @@ constexpr std::size_t kSamples = 600;
 constexpr double kRelativeTolerance = 1e-9;
 
 std::string imuConfig() { return std::string(PC_EKF_SOURCE_DIR) + "/test/ros/estimator_imu.yaml"; }
-
-::testing::AssertionResult close(double a, double b, double scale, const std::string& what) {
-  if (std::abs(a - b) <= kRelativeTolerance * std::abs(scale)) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << what << ": node " << a << " vs offline " << b;
-}
-
-void compareWithOffline(const std::vector<ParameterEstimate>& estimates,
-                        const std::vector<std::vector<double>>& offline,
-                        const std::map<std::string, std::size_t>& column) {
-  ASSERT_EQ(estimates.size(), offline.size());
-  double max_relative = 0.0;
-  for (std::size_t k = 0; k < kSamples; ++k) {
-    const ParameterEstimate& e = estimates[k];
-    ASSERT_EQ(e.sample_index, k + 1);
-    ASSERT_TRUE(close(e.time, offline[k].at(column.at("t")), 1.0, "t"));
-    for (std::size_t i = 0; i < e.names.size(); ++i) {
-      const std::string& p = e.names[i];
-      const double mean = offline[k].at(column.at(p + "_mean"));
-      const std::string at = "sample " + std::to_string(k + 1) + " " + p;
-      ASSERT_TRUE(close(e.mean[i], mean, mean, at + " mean"));
-      const double sd = offline[k].at(column.at(p + "_stddev"));
-      ASSERT_TRUE(close(e.stddev[i], sd, sd, at + " stddev"));
-      max_relative = std::max(max_relative, std::abs(e.stddev[i] - sd) / sd);
-      for (std::size_t j = 0; j < e.term_count; ++j) {
-        ASSERT_TRUE(close(e.coefficients[i * e.term_count + j],
-                          offline[k].at(column.at(p + "_c" + std::to_string(j))), mean,
-                          at + " c" + std::to_string(j)));
-      }
-    }
-  }
-  ::testing::Test::RecordProperty("max_relative_stddev_difference", std::to_string(max_relative));
-}
 
 TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
   ScratchDir scratch;
@@ -133,7 +102,7 @@ TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
 
   ASSERT_EQ(estimates.size(), kSamples) << "samples lost";
   EXPECT_EQ(truths, 1);
-  compareWithOffline(estimates, offline, column);
+  compareWithOffline(estimates, offline, column, kRelativeTolerance);
   if (HasFatalFailure()) return;
 
 
@@ -165,7 +134,7 @@ TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
   spinUntil(10.0, spin, [&] { return estimates.size() >= kSamples; });
   spinUntil(0.5, spin, [] { return false; });
   ASSERT_EQ(estimates.size(), kSamples) << "samples lost (lossless replay)";
-  compareWithOffline(estimates, offline, column);
+  compareWithOffline(estimates, offline, column, kRelativeTolerance);
   EXPECT_EQ(replay.err().find("going on"), std::string::npos) << "a handshake timed out";
 }
 

@@ -15,6 +15,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 
+#include "offline_comparison.h"
 #include "replay_test_support.h"
 
 namespace pc_ekf::test {
@@ -28,35 +29,7 @@ std::string roadFreeConfig() {
 }
 
 ::testing::AssertionResult close(double a, double b, double scale, const std::string& what) {
-  if (std::abs(a - b) <= kRelativeTolerance * std::abs(scale)) return ::testing::AssertionSuccess();
-  return ::testing::AssertionFailure() << what << ": node " << a << " vs offline " << b;
-}
-
-void compareWithOffline(const std::vector<ParameterEstimate>& estimates,
-                        const std::vector<std::vector<double>>& offline,
-                        const std::map<std::string, std::size_t>& column) {
-  ASSERT_EQ(estimates.size(), offline.size());
-  double max_relative = 0.0;
-  for (std::size_t k = 0; k < kSamples; ++k) {
-    const ParameterEstimate& e = estimates[k];
-    ASSERT_EQ(e.sample_index, k + 1);
-    ASSERT_TRUE(close(e.time, offline[k].at(column.at("t")), 1.0, "t"));
-    for (std::size_t i = 0; i < e.names.size(); ++i) {
-      const std::string& p = e.names[i];
-      const double mean = offline[k].at(column.at(p + "_mean"));
-      const std::string at = "sample " + std::to_string(k + 1) + " " + p;
-      ASSERT_TRUE(close(e.mean[i], mean, mean, at + " mean"));
-      const double sd = offline[k].at(column.at(p + "_stddev"));
-      ASSERT_TRUE(close(e.stddev[i], sd, sd, at + " stddev"));
-      max_relative = std::max(max_relative, std::abs(e.stddev[i] - sd) / sd);
-      for (std::size_t j = 0; j < e.term_count; ++j) {
-        ASSERT_TRUE(close(e.coefficients[i * e.term_count + j],
-                          offline[k].at(column.at(p + "_c" + std::to_string(j))), mean,
-                          at + " c" + std::to_string(j)));
-      }
-    }
-  }
-  ::testing::Test::RecordProperty("max_relative_stddev_difference", std::to_string(max_relative));
+  return closeToOffline(a, b, scale, what, kRelativeTolerance);
 }
 
 TEST(EstimatorRoadFree, RosbagPlayWithoutARoadEqualsOffline) {
@@ -121,7 +94,7 @@ TEST(EstimatorRoadFree, RosbagPlayWithoutARoadEqualsOffline) {
     spinUntil(30.0, spin, [&] { return estimates.size() >= kSamples; });
     spinUntil(1.0, spin, [] { return false; });  // a duplicate would arrive now
     ASSERT_EQ(estimates.size(), kSamples) << "samples lost, pass " << pass;
-    compareWithOffline(estimates, offline, column);
+    compareWithOffline(estimates, offline, column, kRelativeTolerance);
     if (HasFatalFailure()) return;
     if (pass == 1) break;
 
