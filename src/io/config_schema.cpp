@@ -30,6 +30,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"pc.order", "integer", "4", "[0, 20]", "total degree p; S = C(n + p, p) basis terms (15 for n = 2)"},
       {"pc.truncation", "choice", "total_degree", "total_degree or hyperbolic", "hyperbolic: only the multi-indices with q-norm (sum_i alpha_i^q)^(1/q) <= p (fewer interactions)"},
       {"pc.q_norm", "number", "1 (hyperbolic: 0.5)", "(0, 1]", "hyperbolic only (refused otherwise); 1 = total degree"},
+      {"pc.tolerance_interactions", "bool", "true", "true or false", "false: a basis term holds at most one `tolerances:` germ (a tolerance interacts with the `uncertain:` parameters, not with another tolerance; n = 16, p = 2: S 153 -> 62)"},
       {"collocation.sequence", "choice", "auto", "auto, halton, scrambled_halton, hammersley, gauss or smolyak", "the collocation points; auto: halton up to 12 uncertain parameters, scrambled_halton above; gauss: tensor Gauss rule (`points` nodes per germ, refused above 20 000 nodes)"},
       {"collocation.points", "integer", "30", "[1, 1000000] (Q >= S)", "Q, the number of points (gauss: per germ; not used by smolyak)"},
       {"collocation.level", "integer", "-1 (= pc.order)", "[0, 30]", "smolyak: sparse grid of the germs' Gauss rules, exact to total degree 2 level + 1"},

@@ -163,7 +163,7 @@ RoadConfig readRoad(YamlMapReader r) {
 }
 
 std::size_t basisSize(int n, int p, const BasisTruncation& truncation) {
-  if (truncation.kind == TruncationKind::kHyperbolic) {
+  if (truncation.kind == TruncationKind::kHyperbolic || truncation.single_from >= 0) {
     return n < 1 ? 1 : truncatedMultiIndices(n, p, truncation).size();
   }
   double s = 1.0;  // C(n + p, p)
@@ -639,6 +639,7 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   YamlMapReader pc = root.map("pc");
   pc.integer("order", c.pc_order, 0, 20);
   c.pc_truncation = readTruncation(pc);
+  if (!readFlag(pc, "tolerance_interactions", true)) c.pc_truncation.single_from = c.loadCount();
   pc.finish();
   const std::size_t terms = basisSize(n, c.pc_order, c.pc_truncation);
 

@@ -37,10 +37,18 @@ std::vector<std::vector<int>> hyperbolicMultiIndices(int dimension, int order, d
 
 std::vector<std::vector<int>> truncatedMultiIndices(int dimension, int order,
                                                     const BasisTruncation& truncation) {
-  if (truncation.kind == TruncationKind::kTotalDegree) {
-    return totalDegreeMultiIndices(dimension, order);
+  std::vector<std::vector<int>> kept =
+      truncation.kind == TruncationKind::kTotalDegree
+          ? totalDegreeMultiIndices(dimension, order)
+          : hyperbolicMultiIndices(dimension, order, truncation.q_norm);
+  if (truncation.single_from < 0) return kept;
+  std::vector<std::vector<int>> single;
+  for (std::vector<int>& alpha : kept) {
+    int count = 0;
+    for (int i = truncation.single_from; i < dimension; ++i) count += alpha[i] != 0;
+    if (count <= 1) single.push_back(std::move(alpha));
   }
-  return hyperbolicMultiIndices(dimension, order, truncation.q_norm);
+  return single;
 }
 
 }  // namespace pc_ekf

@@ -19,6 +19,12 @@ TruncationKind truncationKindFromString(const std::string& name);  // throws std
 struct BasisTruncation {
   TruncationKind kind = TruncationKind::kTotalDegree;
   double q_norm = 1.0;  // hyperbolic only, in (0, 1]
+  // Germs from this index on (a vehicle's tolerances, after the payload's
+  // germs) enter a term at most one at a time: each interacts with the germs
+  // before it, not with another of its kind. Most tolerances act on the
+  // readings nearly additively, and their pairs are most of a total-degree
+  // basis (n = 16, p = 2: S 153 -> 62). -1: no such limit.
+  int single_from = -1;
 };
 
 // Multi-indices of q-norm <= order in `dimension` variables, in the graded
@@ -27,7 +33,8 @@ struct BasisTruncation {
 // Throws std::invalid_argument for q outside (0, 1].
 std::vector<std::vector<int>> hyperbolicMultiIndices(int dimension, int order, double q);
 
-// The multi-indices `truncation` keeps at `order`.
+// The multi-indices `truncation` keeps at `order` (then at most one germ of
+// index >= single_from per multi-index).
 std::vector<std::vector<int>> truncatedMultiIndices(int dimension, int order,
                                                     const BasisTruncation& truncation);
 

@@ -127,6 +127,59 @@ TEST(HyperbolicTruncation, RegressionRecoversAPolynomialOfTheTruncatedSpace) {
   EXPECT_GT((outside - fitted).norm(), 0.1 * outside.norm());
 }
 
+// Closed form: C(a + p, p) terms without a tolerance germ; per tolerance germ
+// and degree d = 1..p, the terms of degree <= p - d in the a free germs.
+std::size_t binomial(int n, int k) {
+  double r = 1.0;
+  for (int i = 1; i <= k; ++i) r = r * (n - k + i) / i;
+  return static_cast<std::size_t>(std::llround(r));
+}
+
+TEST(SingleToleranceTerms, CountIsTheClosedFormAndEveryTermHasOneToleranceAtMost) {
+  for (int free : {0, 1, 2, 3}) {
+    for (int tolerances : {1, 4, 14}) {
+      for (int p : {1, 2, 3}) {
+        BasisTruncation t;
+        t.single_from = free;
+        const int n = free + tolerances;
+        const auto kept = truncatedMultiIndices(n, p, t);
+        std::size_t expected = binomial(free + p, p);
+        for (int d = 1; d <= p; ++d) expected += tolerances * binomial(free + p - d, p - d);
+        EXPECT_EQ(kept.size(), expected) << free << " free, " << tolerances << " tolerances, p " << p;
+        for (const auto& alpha : kept) {
+          int count = 0, degree = 0;
+          for (int i = 0; i < n; ++i) {
+            count += i >= free && alpha[i] != 0;
+            degree += alpha[i];
+          }
+          EXPECT_LE(count, 1);
+          EXPECT_LE(degree, p);
+        }
+      }
+    }
+  }
+  // vehicle_imu.yaml's size: 2 payload germs, 14 tolerances, p = 2.
+  BasisTruncation t;
+  t.single_from = 2;
+  EXPECT_EQ(truncatedMultiIndices(16, 2, t).size(), 62u);
+  // The hyperbolic cross and the limit together: both filters apply.
+  t.kind = TruncationKind::kHyperbolic;
+  t.q_norm = 0.5;  // p = 2: no interaction at all survives
+  EXPECT_EQ(truncatedMultiIndices(16, 2, t).size(), 1u + 16u + 16u);
+}
+
+TEST(SingleToleranceTerms, AToleranceInteractionIsNotRepresented) {
+  // Germs 0 (free) and 1, 2 (tolerances): xi0 xi1 is in the basis, xi1 xi2 is not.
+  BasisTruncation t;
+  t.single_from = 1;
+  const PolynomialBasis kept({kBeta22, kBeta22, kBeta22}, 2, t);
+  const auto& idx = kept.multiIndices();
+  EXPECT_NE(std::find(idx.begin(), idx.end(), std::vector<int>{1, 1, 0}), idx.end());
+  EXPECT_EQ(std::find(idx.begin(), idx.end(), std::vector<int>{0, 1, 1}), idx.end());
+  EXPECT_NE(std::find(idx.begin(), idx.end(), std::vector<int>{0, 0, 2}), idx.end());
+  EXPECT_EQ(kept.size(), 10u - 1u);
+}
+
 TEST(HyperbolicTruncation, RejectsQNormOutsideTheUnitInterval) {
   EXPECT_THROW(hyperbolicMultiIndices(2, 3, 0.0), std::invalid_argument);
   EXPECT_THROW(hyperbolicMultiIndices(2, 3, 1.5), std::invalid_argument);
