@@ -91,7 +91,7 @@ pc_ekf_start_owned estimator_node "$out/estimator_node.log" \
 estimator=$PC_EKF_LAST_PID
 rm -f "$out/ready"
 pc_ekf_start_owned counter "$out/counter.log" "$bin/bench_node_throughput" \
-  "_expect:=$samples" _timeout:=30 "_ready:=$out/ready" "_rate:=$([ "$mode" = road_free ] && echo 5.0 || echo 1.0)" \
+  "_expect:=$samples" _timeout:=30 "_ready:=$out/ready" "_lag_file:=$out/lags.txt" "_rate:=$([ "$mode" = road_free ] && echo 5.0 || echo 1.0)" \
   __name:=bench_node_throughput
 counter=$PC_EKF_LAST_PID
 for _ in $(seq 600); do

@@ -12,6 +12,7 @@ namespace pc_ekf {
 TimelineSettings timelineSettings(const EstimatorConfig& c) {
   TimelineSettings s;
   s.road_topic_required = c.road.source == RoadSource::kTopic;
+  s.road_free = c.road.source == RoadSource::kNone;
   s.analytic_interval = c.sampling.interval();
   s.time_jump_tolerance = c.node.time_jump_tolerance;
   s.road_wait_timeout = c.node.road_wait_timeout;
@@ -113,7 +114,7 @@ StampVerdict EstimatorTimeline::addRoad(const ros::Time& stamp, const std::vecto
     throw std::invalid_argument("EstimatorTimeline::addRoad: " + std::to_string(heights.size()) +
                                 " heights for " + std::to_string(settings_.contacts) + " contacts");
   }
-  if (mode_ == RoadMode::kAnalytic) return StampVerdict::kIgnored;
+  if (mode_ == RoadMode::kAnalytic || settings_.road_free) return StampVerdict::kIgnored;
   const StampVerdict v = order(last_road_, stamp);
   if (v != StampVerdict::kAccepted) return v;
   if (mode_ == RoadMode::kUndecided) {
@@ -152,7 +153,7 @@ std::vector<ReleasedSample> EstimatorTimeline::release(double now, DroppedSample
     const bool expired = now - waiting_since >= settings_.road_wait_timeout ||
                          pending_.size() > settings_.max_pending;
     if (mode_ == RoadMode::kUndecided) {
-      if (!expired) break;
+      if (!expired && !settings_.road_free) break;
       if (settings_.road_topic_required) {
         ++dropped->no_road;
         pending_.pop_front();

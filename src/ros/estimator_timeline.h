@@ -41,6 +41,9 @@ const char* toString(StampVerdict v);
 
 struct TimelineSettings {
   bool road_topic_required = false;  // config road.source: topic
+  // road.source: none: no road is used, so none is waited for: the first
+  // sample sets the origin at once, and road messages are ignored.
+  bool road_free = false;
   double analytic_interval = 0.0;    // sampling interval (s) for the analytic origin
   double time_jump_tolerance = 0.5;  // s
   double road_wait_timeout = 0.5;    // s of wall clock

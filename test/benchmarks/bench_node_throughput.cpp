@@ -6,6 +6,7 @@
 //   ~timeout (s)      give up after this long without a new estimate (default 60)
 //   ~ready (path)     touched once the estimator's publisher is connected
 //   ~rate (x)         the replay's rate (default 1): stamps advance 1/rate as fast
+//   ~lag_file (path)  also write each estimate's stamp and delay (s), one per line
 // Prints one JSON object: received, first_to_last_s, samples_per_s and
 // max_lag_ms: each estimate's delay is its arrival (wall) minus its sample
 // stamp (divided by ~rate: the replay's wall time of the stamp); max_lag_ms is the largest delay
@@ -13,12 +14,15 @@
 // (the fixed offset between the bag's stamps and the wall clock cancels).
 #include <pc_ekf/ParameterEstimate.h>
 #include <ros/ros.h>
+#include <sensor_msgs/JointState.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -29,6 +33,8 @@ struct Counter {
   Clock::time_point first, last;
   double min_delay = 1e300, max_delay = -1e300;
   double rate = 1.0;
+  std::vector<std::pair<double, double>> delays;  // (stamp, delay), with ~lag_file
+  bool keep = false;
   void onEstimate(const pc_ekf::ParameterEstimate::ConstPtr& msg) {
     last = Clock::now();
     if (received++ == 0) first = last;
@@ -36,6 +42,15 @@ struct Counter {
         std::chrono::duration<double>(last.time_since_epoch()).count() - msg->header.stamp.toSec() / rate;
     min_delay = std::min(min_delay, delay);
     max_delay = std::max(max_delay, delay);
+    if (keep) delays.emplace_back(msg->header.stamp.toSec(), delay);
+  }
+  // The same delay for the input itself: what the player adds (not the estimator).
+  double input_min = 1e300, input_max = -1e300;
+  void onInput(const sensor_msgs::JointState::ConstPtr& msg) {
+    const double delay = std::chrono::duration<double>(Clock::now().time_since_epoch()).count() -
+                         msg->header.stamp.toSec() / rate;
+    input_min = std::min(input_min, delay);
+    input_max = std::max(input_max, delay);
   }
 };
 
@@ -52,8 +67,13 @@ int main(int argc, char** argv) {
   pnh.getParam("ready", ready);
   Counter counter;
   pnh.getParam("rate", counter.rate);
+  std::string lag_file;
+  pnh.getParam("lag_file", lag_file);
+  counter.keep = !lag_file.empty();
   ros::Subscriber sub = nh.subscribe("parameter_estimate", 200000, &Counter::onEstimate, &counter,
                                      ros::TransportHints().tcpNoDelay());
+  ros::Subscriber input_sub = nh.subscribe("suspension/joint_states", 200000, &Counter::onInput,
+                                           &counter, ros::TransportHints().tcpNoDelay());
   bool announced = false;
   Clock::time_point quiet_since = Clock::now();
   long seen = 0;
@@ -76,9 +96,16 @@ int main(int argc, char** argv) {
                           : 0.0;
   std::printf(
       "{\"received\": %ld, \"expected\": %d, \"first_to_last_s\": %.6f, \"samples_per_s\": "
-      "%.3f, \"max_lag_ms\": %.3f}\n",
+      "%.3f, \"max_lag_ms\": %.3f, \"input_max_lag_ms\": %.3f}\n",
       counter.received, expect, span,
       span > 0.0 ? static_cast<double>(counter.received - 1) / span : 0.0,
-      counter.received > 0 ? 1e3 * (counter.max_delay - counter.min_delay) : 0.0);
+      counter.received > 0 ? 1e3 * (counter.max_delay - counter.min_delay) : 0.0,
+      counter.input_max > counter.input_min ? 1e3 * (counter.input_max - counter.input_min) : 0.0);
+  if (counter.keep) {
+    std::ofstream out(lag_file.c_str());
+    for (const auto& [stamp, delay] : counter.delays) {
+      out << std::to_string(stamp) << ' ' << std::to_string(delay - counter.min_delay) << '\n';
+    }
+  }
   return counter.received >= expect ? 0 : 1;
 }

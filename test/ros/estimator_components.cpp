@@ -55,6 +55,22 @@ TEST(EstimatorTimeline, AnalyticOriginIsOneIntervalBeforeTheFirstSample) {
   EXPECT_EQ(tl.addRoad(ros::Time(1000, 700000000), 0.0, 0.0, 51.2), StampVerdict::kIgnored);
 }
 
+TEST(EstimatorTimeline, RoadFreeReleasesTheFirstSampleAtOnceAndIgnoresRoads) {
+  TimelineSettings s = settings(false);
+  s.road_free = true;
+  EstimatorTimeline tl(s);
+  DroppedSamples dropped;
+  // A road message before any sample does not make the run a topic run.
+  EXPECT_EQ(tl.addRoad(ros::Time(1000, 100000000), 0.0, 0.0, 49.9), StampVerdict::kIgnored);
+  EXPECT_EQ(tl.addSample(ros::Time(1000, 300000000), sample(1), 50.0), StampVerdict::kAccepted);
+  const auto first = tl.release(50.0, &dropped);  // no wait for a road that is never used
+  ASSERT_EQ(first.size(), 1u);
+  EXPECT_EQ(tl.mode(), RoadMode::kAnalytic);
+  EXPECT_EQ(*tl.origin(), ros::Time(1000, 0));  // the node's rule: one interval before
+  EXPECT_EQ(first[0].measurement.time, 0.3);
+  EXPECT_EQ(tl.roadCount(), 0u);
+}
+
 TEST(EstimatorTimeline, TopicRoadSetsTheOriginAndSamplesWaitForIt) {
   EstimatorTimeline tl(settings(true));
   DroppedSamples dropped;
