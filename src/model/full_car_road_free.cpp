@@ -87,7 +87,9 @@ class FullCarRoadFreeBatch : public ModelBatch {
     const bool at_rest = !(t_before > 0.0);
     if (!at_rest) in_->at(t_before, before);
     const double roll = gyros ? in_->integral(kGyroX, t) : 0.0;
-    const double pitch = gyros ? -in_->integral(kGyroY, t) : 0.0;
+    // REP 103 pitch since rest (nose down > 0): gyro_y's integral, as the
+    // full model's pitch_static - theta.
+    const double pitch = gyros ? in_->integral(kGyroY, t) : 0.0;
     const double gyro_before[2] = {before[kGyroX], before[kGyroY]};
     double out[4];
     for (Eigen::Index q = 0; q < y.cols(); ++q) {

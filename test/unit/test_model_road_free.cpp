@@ -198,10 +198,14 @@ TEST(FullCarRoadFree, ReproducesTheFullModelsImuFromItsSuspensionReadings) {
     motion = std::max(motion, std::abs(imu[k][1] - 9.81));
   }
   EXPECT_GT(motion, 0.3);
-  EXPECT_LT(worst[1], 3e-3 * motion);  // accel_z: cos of the dynamic attitude only
-  EXPECT_LT(worst[0], 5e-3);           // accel_y: the gyros' integrals by trapezoids
-  EXPECT_LT(worst[2], 2e-3);           // gyro increments: trapezoids over 5 ms
-  EXPECT_LT(worst[3], 2e-3);
+  // What is left is the gyros' integrals and increments by trapezoids over
+  // 5 ms (measured: 6.6e-5, 1.1e-6, 2.0e-4, 9.6e-5). A pitch of the wrong
+  // sign in the attitude (pitch_static + theta for pitch_static - theta)
+  // left 3e-3 m/s^2 on accel_z, correlated with the pitch: M biased.
+  EXPECT_LT(worst[1], 1e-5);  // accel_z: the attitude's integrals, to second order
+  EXPECT_LT(worst[0], 2e-4);  // accel_y: the gyros' integrals
+  EXPECT_LT(worst[2], 5e-4);  // gyro increments
+  EXPECT_LT(worst[3], 5e-4);
 }
 
 // A stream (the node) appends the samples one by one: the same inputs,
