@@ -9,6 +9,7 @@
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/pc/in_parts.h"
 #include "pc_ekf/pc/pdf_sampler.h"
@@ -310,6 +311,11 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
       break;
     case EstimationMethod::kEnkf: runEnkf(c, series, model, seed, progress, &r); break;
     case EstimationMethod::kGrid: runGrid(c, series, model, progress, grid_cache, &r); break;
+  }
+  const std::string caveat = roadFreeCaveat(c);
+  if (!caveat.empty()) {
+    r.healthy = false;
+    r.warnings.push_back(caveat);
   }
   r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return r;

@@ -114,4 +114,11 @@ RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries&
   return r;
 }
 
+std::string roadFreeCaveat(const EstimatorConfig& c) {
+  if (c.road.source != RoadSource::kNone || c.model_type->name() != "full_car") return "";
+  return "road-free full car: not validated, reported not healthy (its spreads are optimistic: "
+         "the gyros' drift in accel_y and the noise of the suspension readings bias M and the "
+         "load's position by several std; docs/real_vehicle.md)";
+}
+
 }  // namespace pc_ekf

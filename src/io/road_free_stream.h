@@ -66,4 +66,11 @@ struct RoadFreeRecord {
 };
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
 
+// Why a road-free estimate of this config is not to be trusted, or empty.
+// The full car's is not validated: on its own synthetic drives its spreads
+// are optimistic (scripts/road_free_study.py --full-car: M and the load's
+// lateral position several std off while the health checks pass), so every
+// result of it is reported not healthy, with this reason.
+std::string roadFreeCaveat(const EstimatorConfig& c);
+
 }  // namespace pc_ekf

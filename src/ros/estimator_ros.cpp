@@ -152,6 +152,8 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
                                node + "/load_nodelet", node + "/unload_nodelet", node + "/list"},
       kMasterCheckPeriod);
   logStartSensitivity();
+  road_free_caveat_ = roadFreeCaveat(config_);
+  if (!road_free_caveat_.empty()) ROS_WARN("%s: %s", name_.c_str(), road_free_caveat_.c_str());
   ROS_INFO("%s: estimating from %s (road %s, update %s); config %s", name_.c_str(),
            nh_.resolveName("suspension/joint_states").c_str(),
            toString(config_.road.source).c_str(), toString(config_.update).c_str(),
@@ -526,6 +528,7 @@ void EstimatorRos::process(const ReleasedSample& sample) {
     return;
   }
   const double done = steadySeconds();
+  if (!road_free_caveat_.empty()) e.estimate.healthy = false;  // roadFreeCaveat
   estimate_pub_.publish(e.estimate);
   if (e.pdf && pdf_worker_) pdf_worker_->submit(std::move(*e.pdf));
   timeline_.keepRoadFrom(run_->oldestTime());

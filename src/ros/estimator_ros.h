@@ -99,6 +99,7 @@ class EstimatorRos {
   // road.source none: the run's inputs (suspension readings, gyro) and the
   // model they drive, renewed with every run (startRun).
   std::unique_ptr<RoadFreeStream> road_free_;
+  std::string road_free_caveat_;  // roadFreeCaveat: every estimate reported not healthy
   std::unique_ptr<ImuInput> imu_;  // null: measurement.channels select no IMU channel
   std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
   std::unique_ptr<PdfWorker> pdf_worker_;  // null: no parameter_pdf
