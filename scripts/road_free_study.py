@@ -33,12 +33,14 @@ CAR_LOADS = [(150.0, 1.0, 0.62), (280.0, 1.6, 0.90)]
 CAR_IMU = """measurement:
   channels: [u_fl, u_fr, u_rl, u_rr, v_fl, v_fr, v_rl, v_rr, accel_y, accel_z, gyro_x, gyro_y]
   zero: %s
+  travel_blend: 0.02
   r_rule: sensor
   sensor_std: [5.0e-4, 5.0e-4, 5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3, 5.0e-3, 5.0e-3, 0.03, 0.03, 0.002, 0.002]
   r_relative: [0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.0, 0.0, 0.0, 0.0]
   noise_relative: [0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.01, 0.0, 0.0, 0.0, 0.0]
 """
 ROADS = {
+    "ISO A, 36 km/h, 10 s": ("{source: iso8608, speed_kmh: 36.0, iso8608: {class: A, seed: %d}}", 10.0),
     "ISO B, 36 km/h, 10 s": ("{source: iso8608, speed_kmh: 36.0, iso8608: {class: B, seed: %d}}", 10.0),
     "ISO C, 54 km/h, 10 s": ("{source: iso8608, speed_kmh: 54.0, iso8608: {class: C, seed: %d}}", 10.0),
     "bump, 16 km/h, 3 s": ("{source: speed_bump}", 3.0),
@@ -60,18 +62,23 @@ def config_text(road, duration, zero, vehicle, mass, position, seed):
     return text[:start] + truth + text[end:]
 
 
-def car_config_text(road, duration, zero, vehicle, load, seed):
+def car_config_text(road, duration, zero, vehicle, load, seed, accel_y=True):
     """full_car_live.yaml with the road unknown, the IMU channels and a synthetic truth."""
     text = open(os.path.join(ROOT, "config", "full_car_live.yaml")).read()
     start = text.index("\nroad:")
     end = text.index("\nintegration:")
-    text = text[:start] + "\nroad:\n  source: none\n\n" + CAR_IMU % zero + text[end:]
+    imu = CAR_IMU % zero
+    if not accel_y:  # the channel's entry out of each per-channel list
+        imu = imu.replace("accel_y, ", "").replace("0.03, 0.03, 0.002", "0.03, 0.002")
+        imu = imu.replace("0.01, 0.0, 0.0, 0.0, 0.0]", "0.01, 0.0, 0.0, 0.0]")
+    text = text[:start] + "\nroad:\n  source: none\n\n" + imu + text[end:]
     mass, x, y = load
     xi = [(mass / 200.0 - 1.0) / 0.5, (x / 1.3 - 1.0) / 0.4, (y / 0.75 - 1.0) / 0.25]
     text += "sampling:\n  samples: %d\n  duration: %.1f\n" % (int(200 * duration), duration)
     text += "truth:\n  xi: [%s]\n" % ", ".join("%.10f" % v for v in xi)
     text += "  road: %s\n" % (road % seed if "%d" in road else road)
-    text += "  sensor:\n    noise_floor: [5.0e-4, 5.0e-4, 5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3, 5.0e-3, 5.0e-3, 0.03, 0.03, 0.002, 0.002]\n"
+    floor = "0.03, 0.03, 0.002, 0.002" if accel_y else "0.03, 0.002, 0.002"
+    text += "  sensor:\n    noise_floor: [5.0e-4, 5.0e-4, 5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3, 5.0e-3, 5.0e-3, %s]\n" % floor
     if vehicle:
         text += "  vehicle: {%s}\n" % ", ".join("%s: %s" % kv for kv in CAR_OFF.items())
     return text
@@ -87,6 +94,8 @@ def main():
                          "5 cm off (tolerance 2 cm); every run should be flagged")
     ap.add_argument("--full-car", action="store_true",
                     help="config/full_car_live.yaml made road-free, with IMU channels")
+    ap.add_argument("--without-accel-y", action="store_true",
+                    help="--full-car: accel_z and the two gyros only")
     a = ap.parse_args()
     if a.model_errors:
         return model_errors(a)
@@ -151,7 +160,8 @@ def full_car(a):
                             for seed in range(1, a.seeds + 1):
                                 cfg = os.path.join(tmp, "c.yaml")
                                 open(cfg, "w").write(car_config_text(road, duration, zero, vehicle,
-                                                                     load, seed))
+                                                                     load, seed,
+                                                                     not a.without_accel_y))
                                 out = subprocess.run([exe, "--config", cfg, "--method", method,
                                                       "--seed", str(seed)],
                                                      capture_output=True, text=True)

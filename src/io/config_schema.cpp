@@ -72,6 +72,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"sampling.samples", "integer", "10", "[1, 100000000]", "N; t_k = k duration / N, k = 1..N"},
       {"sampling.duration", "number", "3", "(0, inf)", "s"},
       {"measurement.channels", "names", "[u1, u2, v1, v2] (the model's suspension channels)", "distinct channels of the model", "observed channels; the IMU channels (`accel_y`, `accel_z`, `gyro_x`; full car also `gyro_y`) only when named"},
+      {"measurement.travel_blend", "number", "0", "[0, 10]", "s; road-free only: each travel reading (u) blended with the integral of its rate (v) by a complementary filter of this time constant, which cuts the travel's noise that would otherwise make the springs look soft; 0 = the raw readings; [method.md §4.10](method.md#410-road-free-estimation-roadsource-none)"},
       {"measurement.zero", "choice", "rest", "rest or tare", "rest: every channel a deviation from the loaded vehicle at rest (the paper's); tare: as the sensors give them, suspension zeroed on the empty vehicle and the IMU raw (+g on `accel_z` at rest); [method.md §1.6](method.md#16-measurements-and-synthetic-data)"},
       {"measurement.noise_relative", "number or numbers", "0.01", "[0, inf)", "synthetic data noise: std = noise_relative \\|z_true\\|; one number, or one per channel of `channels` (or of the model)"},
       {"measurement.noise_floor", "number", "0", "[0, inf)", "synthetic data: plus this absolute std (in quadrature)"},

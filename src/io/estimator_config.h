@@ -64,6 +64,9 @@ struct MeasurementConfig {
   // model.type's channels selected by default (parsed); IMU channels by name.
   std::vector<std::string> channels = rollPlaneType()->description().defaultChannelNames();
   ZeroConvention zero = ZeroConvention::kRest;  // measurement.zero: rest | tare
+  // measurement.travel_blend: road-free, each travel reading blended with its
+  // rate's integral over this time constant (s; 0 = the raw readings).
+  double travel_blend = 0.0;
   double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
   double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
   // Filter R (see NoiseModel): paper R_jj = max(r_floor, (r_relative z_obs,j)^2);

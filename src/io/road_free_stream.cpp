@@ -61,6 +61,26 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     relative_[e] = noise.channel_relative.size() != 0 ? noise.channel_relative[ch] : noise.r_relative;
     absolute_[e] = noise.rule == NoiseRule::kSensor ? noise.channel_std[ch] : std::sqrt(noise.r_floor);
   }
+  // Travel u blended with its rate v (the same suffix: u1/v1, u_fl/v_fl).
+  blend_ = c.measurement.travel_blend;
+  for (std::size_t i = 0; blend_ > 0.0 && i < inputs.size(); ++i) {
+    if (inputs[i].empty() || inputs[i][0] != 'u') continue;
+    const auto v = std::find(inputs.begin(), inputs.end(), "v" + inputs[i].substr(1));
+    if (v == inputs.end()) continue;
+    Blend b;
+    b.u = static_cast<int>(i);
+    b.v = static_cast<int>(v - inputs.begin());
+    blends_.push_back(b);
+    // The blended travel's noise at the sampling interval dt, a = tau / (tau + dt):
+    // the travel's, low-passed, (1 - a) / (1 + a) of its variance; the rate's
+    // trapezoid increments (variance dt^2 sigma_v^2 / 2), high-passed,
+    // a^2 / (1 - a^2) of theirs.
+    const double dt = c.sampling.interval(), a = blend_ / (blend_ + dt);
+    const double low = (1.0 - a) / (1.0 + a);
+    const double high = a * a / (1.0 - a * a) * dt * dt * 0.5 * absolute_[b.v] * absolute_[b.v];
+    absolute_[b.u] = std::sqrt(low * absolute_[b.u] * absolute_[b.u] + high);
+    relative_[b.u] *= std::sqrt(low);
+  }
   accel_z_ = type.description().channelIndex("accel_z");
   inherited_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(channels.size()));
 }
@@ -71,8 +91,11 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     const auto it = std::find(input_channels_.begin(), input_channels_.end(), m.channels[j]);
     if (it != input_channels_.end()) in[it - input_channels_.begin()] = m.values[static_cast<Eigen::Index>(j)];
   }
+  std::vector<Blend> blended = blends_;
+  for (Blend& b : blended) blendTravel(b, m.time, &in);
   const std::string problem = inputs_->append(m.time, in.data());
   if (!problem.empty()) return problem;
+  blends_ = std::move(blended);
   ++samples_;
   Measurement o = onlyChannels(m, outputs_);
   for (std::size_t j = 0; j < o.channels.size(); ++j) {
@@ -90,6 +113,22 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   }
   *out = std::move(o);
   return "";
+}
+
+void RoadFreeStream::blendTravel(Blend& b, double t, std::vector<double>* in) const {
+  double& u = (*in)[static_cast<std::size_t>(b.u)];
+  const double v = (*in)[static_cast<std::size_t>(b.v)];
+  if (!std::isfinite(u)) return;  // held by the inputs; the blend waits for a reading
+  if (!b.started || !std::isfinite(v) || !std::isfinite(b.v_last) || !(t > b.t_last)) {
+    b.u_blended = u;  // starts (again) from the reading itself
+  } else {
+    const double dt = t - b.t_last, a = blend_ / (blend_ + dt);
+    b.u_blended = a * (b.u_blended + 0.5 * (b.v_last + v) * dt) + (1.0 - a) * u;
+  }
+  b.started = true;
+  b.t_last = t;
+  b.v_last = v;
+  u = b.u_blended;
 }
 
 void RoadFreeStream::updateInputNoise() {

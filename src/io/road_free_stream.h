@@ -34,6 +34,10 @@ class RoadFreeStream {
   // Built on the inputs appended so far (they grow under it).
   const std::shared_ptr<const MechanicalModel>& model() const { return model_; }
   const std::vector<int>& outputChannels() const { return outputs_; }
+  // The inputs as appended (a blended travel after its blend) and the std of
+  // each one's noise there, absolute part (the relative part is scaled alike).
+  const ReadingInputs& inputs() const { return *inputs_; }
+  const Eigen::VectorXd& inputNoiseStd() const { return absolute_; }
 
   // Appends m's inputs and writes its outputs to `out`, each with the
   // variance it inherits from the noise of this sample's inputs
@@ -42,6 +46,16 @@ class RoadFreeStream {
   std::string add(const Measurement& m, Measurement* out);
 
  private:
+  // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +
+  // (1 - a) u, a = tau / (tau + dt), a complementary filter: the travel's
+  // slow part (its sag) from its own reading, its fast part from the rate's
+  // integral, with no lag on a travel and rate that agree.
+  struct Blend {
+    int u = -1, v = -1;  // input indices
+    bool started = false;
+    double u_blended = 0.0, t_last = 0.0, v_last = 0.0;
+  };
+  void blendTravel(Blend& b, double t, std::vector<double>* in) const;
   void updateInputNoise();
 
   std::string source_;
@@ -49,7 +63,9 @@ class RoadFreeStream {
   std::shared_ptr<const MechanicalModel> model_;
   std::vector<int> input_channels_;  // model channel per input
   std::vector<int> outputs_;          // ascending model channels
-  Eigen::VectorXd absolute_, relative_;  // each input's noise
+  Eigen::VectorXd absolute_, relative_;  // each input's noise (a blended travel's: after the blend)
+  double blend_ = 0.0;                   // measurement.travel_blend (s)
+  std::vector<Blend> blends_;
   int accel_z_ = -1;
   double accel_z_sum_ = 0.0;
   long accel_z_count_ = 0;

@@ -6,6 +6,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cmath>
+#include <random>
 #include <string>
 
 #include "pc_ekf/io/estimation_setup.h"
@@ -20,6 +21,7 @@ EstimatorConfig imuConfig(int samples, double duration) {
   YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
   root["sampling"]["samples"] = samples;
   root["sampling"]["duration"] = duration;
+  root["measurement"]["travel_blend"] = 0.0;  // the raw travel: the formulation alone
   return parseConfig(root, "vehicle_imu.yaml");
 }
 
@@ -90,6 +92,59 @@ TEST(RoadFreeStream, RefusesSamplesByName) {
   EXPECT_NE(stream.add(late[0], &out).find("'u1' not read yet"), std::string::npos);
   EXPECT_EQ(stream.add(late[1], &out), "");
   EXPECT_EQ(out.channels, (std::vector<int>{4, 5, 6}));
+}
+
+// measurement.travel_blend: a travel and a rate that agree come through
+// unchanged (no lag), and the travel's noise falls to what the stream
+// assumes for it (its inherited variances use that figure).
+TEST(RoadFreeStream, TravelBlendFollowsAnAgreeingRateAndCutsTheNoise) {
+  EstimatorConfig c = imuConfig(2000, 10.0);
+  c.measurement.travel_blend = 0.02;
+  const double dt = 0.005, w = 2.0 * M_PI * 1.5, a = 0.003;
+  const auto sample = [&](double t, double u1, double v1) {
+    Measurement m;
+    m.time = t;
+    m.channels = {0, 1, 2, 3, 4, 5, 6};
+    m.values = (Eigen::VectorXd(7) << u1, 0.01, v1, 0.0, 0.0, 9.81, 0.0).finished();
+    return m;
+  };
+  {
+    RoadFreeStream stream(c, RoadFreeStream::inputsFor(c));
+    double worst = 0.0;
+    for (int k = 1; k <= 2000; ++k) {
+      const double t = k * dt;
+      Measurement out;
+      ASSERT_EQ(stream.add(sample(t, 0.02 + a * std::sin(w * t), a * w * std::cos(w * t)), &out), "");
+      double in[5];
+      stream.inputs().at(t, in);
+      worst = std::max(worst, std::abs(in[0] - (0.02 + a * std::sin(w * t))));
+    }
+    EXPECT_LT(worst, 1e-4 * a);  // the rate's trapezoids, nothing more
+  }
+  // Noise only: a constant travel, 0.5 mm + 1 % of 20 mm, and a rate of 5 mm/s.
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c));
+  std::mt19937_64 rng(3);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double su = std::hypot(5e-4, 0.01 * 0.02), sv = 5e-3;
+  double sum = 0.0, sum_sq = 0.0;
+  long n = 0;
+  for (int k = 1; k <= 40000; ++k) {
+    const double t = k * dt;
+    Measurement out;
+    ASSERT_EQ(stream.add(sample(t, 0.02 + su * normal(rng), sv * normal(rng)), &out), "");
+    if (k <= 200) continue;  // the blend's start
+    double in[5];
+    stream.inputs().at(t, in);
+    sum += in[0];
+    sum_sq += in[0] * in[0];
+    ++n;
+  }
+  const double measured = std::sqrt(sum_sq / n - (sum / n) * (sum / n));
+  const double low = dt / (2.0 * 0.02 + dt);
+  const double assumed = std::hypot(stream.inputNoiseStd()[0], std::sqrt(low) * 0.01 * 0.02);
+  EXPECT_NEAR(measured, assumed, 0.05 * assumed);
+  EXPECT_LT(assumed, 0.4 * su);  // a third of the raw travel's noise
+  EXPECT_NEAR(sum / n, 0.02, 3.0 * assumed / std::sqrt(n / 20.0));  // the sag kept
 }
 
 TEST(RoadFreeStream, NeedsAReadingToPredict) {
