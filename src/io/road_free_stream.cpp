@@ -155,9 +155,11 @@ RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries&
 
 std::string roadFreeCaveat(const EstimatorConfig& c) {
   if (c.road.source != RoadSource::kNone || c.model_type->name() != "full_car") return "";
-  return "road-free full car: not validated, reported not healthy (its spreads are optimistic: "
-         "the gyros' drift in accel_y and the noise of the suspension readings bias M and the "
-         "load's position by several std; docs/real_vehicle.md)";
+  const auto& ch = c.measurement.channels;
+  if (std::find(ch.begin(), ch.end(), "accel_y") == ch.end()) return "";
+  return "road-free full car with accel_y: not validated, reported not healthy (the gyros' "
+         "drift in accel_y makes the load's lateral position look several times more precise "
+         "than it is; leave accel_y out, docs/real_vehicle.md)";
 }
 
 }  // namespace pc_ekf

@@ -83,10 +83,10 @@ struct RoadFreeRecord {
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
 
 // Why a road-free estimate of this config is not to be trusted, or empty.
-// The full car's is not validated: on its own synthetic drives its spreads
-// are optimistic (scripts/road_free_study.py --full-car: M and the load's
-// lateral position several std off while the health checks pass), so every
-// result of it is reported not healthy, with this reason.
+// The full car's with accel_y is not: on its own synthetic drives the load's
+// lateral position came out several std off while the health checks passed
+// (scripts/road_free_study.py --full-car), so every result of it is reported
+// not healthy, with this reason.
 std::string roadFreeCaveat(const EstimatorConfig& c);
 
 }  // namespace pc_ekf
