@@ -639,9 +639,14 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   YamlMapReader pc = root.map("pc");
   pc.integer("order", c.pc_order, 0, 20);
   c.pc_truncation = readTruncation(pc);
-  if (!readFlag(pc, "tolerance_interactions", true)) c.pc_truncation.single_from = c.loadCount();
+  const bool interactions = readFlag(pc, "tolerance_interactions", true);
+  if (!interactions) c.pc_truncation.single_from = c.loadCount();
+  c.batch_truncation = c.pc_truncation;
+  c.batch_truncation.single_from =
+      readFlag(pc, "batch_tolerance_interactions", interactions) ? -1 : c.loadCount();
   pc.finish();
   const std::size_t terms = basisSize(n, c.pc_order, c.pc_truncation);
+  const std::size_t batch_terms = basisSize(n, c.pc_order, c.batch_truncation);
 
   YamlMapReader col = root.map("collocation");
   // auto (the default): plain Halton up to kPlainHaltonMaxDimension germs,
@@ -657,6 +662,8 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   }
   if (seq == "auto") seq = toString(c.collocation.sequence);
   col.integer("points", c.collocation.points, 1, 1000000);
+  c.collocation.batch_points = c.collocation.points;
+  col.integer("batch_points", c.collocation.batch_points, 1, 1000000);
   col.integer("level", c.collocation.level, 0, 30);
   std::string projection = toString(c.collocation.projection);
   col.text("projection", projection);
@@ -705,6 +712,20 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
     col.fail("points", std::to_string(c.collocation.points),
              "at least S = " + std::to_string(terms) + " collocation points (basis terms for " +
                  std::to_string(n) + " germs, order " + std::to_string(c.pc_order) + ")");
+  }
+  const double batch_q = c.collocation.sequence == PointSequence::kGauss
+                             ? std::pow(c.collocation.batch_points, n)
+                             : c.collocation.batch_points;
+  if (c.collocation.sequence != PointSequence::kSmolyak && batch_q < batch_terms) {
+    col.fail("batch_points", std::to_string(c.collocation.batch_points),
+             "at least S = " + std::to_string(batch_terms) +
+                 " collocation points (the batch methods' basis terms for " + std::to_string(n) +
+                 " germs, order " + std::to_string(c.pc_order) + ")");
+  }
+  if (c.collocation.sequence == PointSequence::kGauss && batch_q > kMaxTensorNodes) {
+    col.fail("batch_points", std::to_string(c.collocation.batch_points),
+             "at most " + std::to_string(static_cast<int>(kMaxTensorNodes)) +
+                 " tensor Gauss nodes (points^n)");
   }
   col.finish();
 

@@ -109,6 +109,7 @@ struct CollocationConfig {
   std::uint64_t seed = 1;  // scrambled_halton: the scrambling's seed
   double max_condition = 1e8;
   int threads = 0;  // forecast threads; 0 = the machine's cores
+  int batch_points = 30;  // the batch methods' Q (collocation.batch_points; default: points)
   // Relative leave-one-out error of the forecast above which a warning is raised.
   double loo_warning = 0.1;
   // The count CollocationDesign takes: points, or the level for smolyak.
@@ -213,7 +214,10 @@ struct EstimatorConfig {
   std::string vehicle_file;       // the merged vehicle_file ("" without one)
   double tolerances_prune = 0.0;  // fix tolerances with every total Sobol index below this
   int pc_order = 4;
-  BasisTruncation pc_truncation;  // pc.truncation, pc.q_norm
+  BasisTruncation pc_truncation;  // pc.truncation, pc.q_norm, pc.tolerance_interactions
+  // The batch methods' basis (es_mda, whole_set, the node's ~estimate_batch):
+  // pc_truncation with pc.batch_tolerance_interactions (batchDesignConfig()).
+  BasisTruncation batch_truncation;
   CollocationConfig collocation;
   RoadConfig road;
   SamplingConfig sampling;
