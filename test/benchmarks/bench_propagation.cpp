@@ -346,7 +346,7 @@ void BM_DesignDefault(benchmark::State& state) {
   EstimatorConfig c = paperConfig(100);
   c.pc_order = given.pc_order;
   c.pc_truncation = given.pc_truncation;
-  c.batch_truncation = given.batch_truncation;
+  c.batch_tolerance_interactions = given.batch_tolerance_interactions;
   c.collocation = given.collocation;
   designCounters(state, c);
 }

@@ -230,11 +230,19 @@ TEST(BatchDesign, EsMdaOnItsOwnDesignOneStepOnTheSparseBasis) {
   const EstimatorConfig b = parseConfig(full, "full.yaml");
   ASSERT_EQ(a.uncertain.size(), 15u);
   EXPECT_EQ(truncatedMultiIndices(15, 2, a.pc_truncation).size(), 58u);
-  EXPECT_EQ(truncatedMultiIndices(15, 2, a.batch_truncation).size(), 136u);
+  EXPECT_EQ(truncatedMultiIndices(15, 2, a.batchTruncation()).size(), 136u);
   EXPECT_EQ(a.collocation.points, 116);
-  EXPECT_EQ(a.collocation.batch_points, 306);
+  EXPECT_EQ(a.collocation.batchPoints(), 306);
   EXPECT_TRUE(separateBatchDesign(a));
   EXPECT_FALSE(separateBatchDesign(b));
+  // Unset, the batch design follows the one-step filter's, also when a
+  // program changes it after parsing.
+  EstimatorConfig d = b;
+  d.collocation.points = 200;
+  d.pc_truncation.single_from = 2;
+  EXPECT_EQ(batchDesignConfig(d).collocation.points, 200);
+  EXPECT_EQ(batchDesignConfig(d).pc_truncation.single_from, 2);
+  EXPECT_FALSE(separateBatchDesign(d));
 
   const auto model = makeModel(a, makeRoad(a));
   const MeasurementSeries data = synthesizeFromConfig(a, *model, 3);
