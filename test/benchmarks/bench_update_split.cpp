@@ -32,9 +32,9 @@ namespace {
 
 // A shipped live config as shipped but on the speed bump, N = 100 over 3 s.
 EstimatorConfig liveOnBump(int which) {
-  EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) +
-                                     (which == 0 ? "/config/vehicle_live.yaml"
-                                                 : "/config/full_car_live.yaml"));
+  EstimatorConfig c =
+      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) +
+                     (which == 0 ? "/config/vehicle_live.yaml" : "/config/full_car_live.yaml"));
   c.road.source = RoadSource::kSpeedBump;
   c.sampling.samples = 100;
   c.sampling.duration = 3.0;
@@ -131,10 +131,13 @@ void RunSplitLive(benchmark::State& state) {
     OneStepSettings settings = makeOneStepSettings(c);
     if (!relinearize) settings.relinearize.max_restarts = 0;
     StepResult last;
-    const double s = bestOf(3, [&] {
-      OneStepFilter filter(prop, settings);
-      for (const Measurement& m : series) last = filter.process(m);
-    }, wallSeconds);
+    const double s = bestOf(
+        3,
+        [&] {
+          OneStepFilter filter(prop, settings);
+          for (const Measurement& m : series) last = filter.process(m);
+        },
+        wallSeconds);
     return std::make_pair(s, last);
   };
   const std::string dir =
@@ -145,15 +148,19 @@ void RunSplitLive(benchmark::State& state) {
     filter_s = with;
     plain_s = filterWall(false).first;
     std::shared_ptr<const ParameterPdfSampler> pdfs;
-    setup_s = bestOf(3, [&] { pdfs = makePdfSampler(c, prop->basis(), prop->parameterCount()); },
-                     wallSeconds);
-    hist_s = bestOf(3, [&] { benchmark::DoNotOptimize(pdfs->histograms(last.coefficients)); },
-                    wallSeconds);
+    setup_s = bestOf(
+        3, [&] { pdfs = makePdfSampler(c, prop->basis(), prop->parameterCount()); }, wallSeconds);
+    hist_s = bestOf(
+        3, [&] { benchmark::DoNotOptimize(pdfs->histograms(last.coefficients)); }, wallSeconds);
     OfflineResult r;
-    estimate_s = bestOf(3, [&] {
-      r = runOfflineEstimation(c, series, model, EstimationMethod::kOneStep, c.truth.seed);
-    }, wallSeconds);
-    output_s = bestOf(3, [&] { writeOfflineOutputs(r, dir); }, wallSeconds);
+    estimate_s = bestOf(
+        3,
+        [&] {
+          r = runOfflineEstimation(c, series, model, EstimationMethod::kOneStep, c.truth.seed);
+        },
+        wallSeconds);
+    output_s = bestOf(
+        3, [&] { writeOfflineOutputs(r, dir); }, wallSeconds);
   }
   std::filesystem::remove_all(dir);
   state.counters["S"] = prop->termCount();
