@@ -9,6 +9,10 @@
 #   rtf_paper_end_to_end     config/speed_bump.yaml (n = 2, N = 10)
 #   road_free_rtf_end_to_end config/vehicle_imu.yaml (road-free, n = 16) on its own
 #                            synthetic 10 s, 200 Hz drive (ISO B), read as a CSV
+#   live_rtf_end_to_end      config/vehicle_live.yaml as shipped (n = 15) but its
+#                            road: the paper bump, N = 100 over 3 s, synthesised
+#   full_car_live_rtf_end_to_end  config/full_car_live.yaml likewise (n = 12, the
+#                            full car's speed bump)
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/common.sh"
@@ -47,10 +51,23 @@ if "$bin/synthesize_bag" --config "$imu" --output "$out/road_free.bag" --csv "$o
   2>"$out/road_free_synthesis.err"; then
   road_free_wall=$(best_wall "$imu" road_free --measurements "$out/road_free.csv")
 fi
+# The shipped live configs, every section as shipped but the road (a topic
+# there): the speed bump, N = 100 over 3 s.
+as_shipped_on_bump() {  # as_shipped_on_bump CONFIG OUT
+  sed -E "/^road:/,/^[a-z]/ s/^(  source:) *topic\b.*/\1 speed_bump/" "$1" >"$2"
+  printf 'sampling:\n  samples: 100\n  duration: 3.0\n' >>"$2"
+  grep -qE "^  source: speed_bump" "$2"
+}
+live_wall=null
+car_live_wall=null
+as_shipped_on_bump "$PC_EKF_ROOT/config/vehicle_live.yaml" "$out/live.yaml" &&
+  live_wall=$(best_wall "$out/live.yaml" live)
+as_shipped_on_bump "$PC_EKF_ROOT/config/full_car_live.yaml" "$out/full_car_live.yaml" &&
+  car_live_wall=$(best_wall "$out/full_car_live.yaml" full_car_live)
 /usr/bin/python3 - "$out/end_to_end.json" "$n11_wall" "$car_wall" "$paper_wall" "$runs" \
-  "$road_free_wall" <<'PY'
+  "$road_free_wall" "$live_wall" "$car_live_wall" <<'PY'
 import json, sys
-path, n11, car, paper, runs, road_free = sys.argv[1:]
+path, n11, car, paper, runs, road_free, live, car_live = sys.argv[1:]
 def rtf(wall, duration=3.0):  # all three records are 3 s long
     return None if wall == "null" else duration / float(wall)
 def wall(w):
@@ -60,6 +77,10 @@ json.dump({
     "full_car_tolerances_rtf": rtf(car),
     "rtf_paper_end_to_end": rtf(paper),
     "road_free_rtf_end_to_end": rtf(road_free, 10.0),
+    "live_rtf_end_to_end": rtf(live),
+    "full_car_live_rtf_end_to_end": rtf(car_live),
+    "live_end_to_end_wall_s": wall(live),
+    "full_car_live_end_to_end_wall_s": wall(car_live),
     "road_free_end_to_end_wall_s": wall(road_free),
     "n11_end_to_end_wall_s": wall(n11),
     "full_car_tolerances_wall_s": wall(car),

@@ -16,6 +16,12 @@
 #     estimation as shipped (config/vehicle_imu.yaml: 10 s at 200 Hz on ISO
 #     class B, joint_states and imu/data, no road), played by
 #     `rosbag play -r 5` (1 kHz, no handshake); node_max_lag_ms as above.
+#   bench_node.sh BIN_DIR OUT_DIR live -> OUT_DIR/node.json: the node with
+#     config/vehicle_live.yaml as shipped (road from road/profile, its PDFs,
+#     re-linearisation and threads) on a bag of the paper bump synthesised at
+#     1 kHz for 10 s (vehicle_live.yaml with road speed_bump, 10^4 samples),
+#     played by `rosbag play` at the recorded rate (no handshake);
+#     node_max_lag_ms as above.
 # Writes null figures (with the reason) when the executables are missing.
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
@@ -29,6 +35,7 @@ mode=${3:-paper}
 samples=${PC_EKF_BENCH_NODE_SAMPLES:-10000}
 duration=$(awk -v n="$samples" 'BEGIN { printf "%g", n / 1000 }')  # 1 kHz
 [ "$mode" = road_free ] && samples=2000  # vehicle_imu.yaml's drive: 10 s at 200 Hz
+# (live: the 1 kHz bag below; the node's config is vehicle_live.yaml as shipped)
 mkdir -p "$out"
 json="$out/node.json"
 
@@ -60,9 +67,16 @@ else
   rate=0
 fi
 config="$out/${mode}_1khz.yaml"
+bag_config=$config  # what synthesize_bag simulates (live: the bump, not the topic)
 if [ "$mode" = road_free ]; then
   # As shipped: only the node's joint names are what synthesize_bag writes.
   cp "$PC_EKF_ROOT/config/vehicle_imu.yaml" "$config"
+elif [ "$mode" = live ]; then
+  cp "$PC_EKF_ROOT/config/vehicle_live.yaml" "$config"
+  bag_config="$out/live_bag.yaml"
+  sed -E "/^road:/,/^[a-z]/ s/^(  source:) *topic\b.*/\1 speed_bump/" "$config" >"$bag_config"
+  printf 'sampling:\n  samples: %s\n  duration: %s\n' "$samples" "$duration" >>"$bag_config"
+  grep -qE "^  source: speed_bump" "$bag_config" || write_null "cannot set road.source in the bag's config"
 else
 sed -E -e "/^sampling:/,/^[a-z]/ s/^(  samples:) *[0-9]+/\1 $samples/" \
   -e "/^sampling:/,/^[a-z]/ s/^(  duration:) *[0-9.]+/\1 $duration/" \
@@ -76,13 +90,13 @@ if [ "$mode" = n11 ]; then
   sed -i -E 's/^(  relinearize: \{.*max_samples: [0-9]+)\}/\1, defer: 1.0}/' "$config"
   grep -q "defer: 1.0" "$config" || write_null "cannot set filter.relinearize.defer in the config"
 fi
-grep -qE "^  samples: $samples\b" "$config" || write_null "cannot set sampling.samples in the config"
-if [ "$mode" != road_free ]; then
+grep -qE "^  samples: $samples\b" "$bag_config" || write_null "cannot set sampling.samples in the config"
+if [ "$mode" != road_free ] && [ "$mode" != live ]; then
   grep -qE "^  pdf_every: 100\b" "$config" && grep -qE "^  draws: $draws\b" "$config" ||
     write_null "cannot set node.pdf_every / pdf.draws in the config"
 fi
 bag="$out/${mode}_1khz.bag"
-"$bin/synthesize_bag" --config "$config" --output "$bag" >"$out/synthesize_bag.log" 2>&1 ||
+"$bin/synthesize_bag" --config "$bag_config" --output "$bag" >"$out/synthesize_bag.log" 2>&1 ||
   write_null "synthesize_bag failed (see node/synthesize_bag.log)"
 
 pc_ekf_roscore_start "$out/roscore.log" || write_null "roscore did not start"
@@ -104,6 +118,8 @@ done
 start=$(date +%s.%N)
 if [ "$mode" = road_free ]; then
   pc_ekf_start_owned rosbag_play "$out/replay_node.log" /usr/bin/rosbag play --quiet -r 5 -d 1 "$bag"
+elif [ "$mode" = live ]; then
+  pc_ekf_start_owned rosbag_play "$out/replay_node.log" /usr/bin/rosbag play --quiet -d 1 "$bag"
 else
   pc_ekf_start_owned replay_node "$out/replay_node.log" "$bin/replay_node" "_bag:=$bag" \
     "_rate:=$rate" _lossless:=false __name:=replay_node

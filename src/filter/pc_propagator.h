@@ -46,6 +46,7 @@ class PcPropagator {
                IntegratorSettings settings, int threads = 1);
 
   const MechanicalModel& model() const { return *model_; }
+  std::shared_ptr<const MechanicalModel> modelPointer() const { return model_; }
   const PolynomialBasis& basis() const { return basis_; }
   const CollocationDesign& design() const { return design_; }
   const ParameterMapping& mapping() const { return mapping_; }

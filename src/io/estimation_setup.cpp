@@ -113,6 +113,17 @@ void checkToleranceDomain(const EstimatorConfig& c, const MechanicalModel& model
   }
 }
 
+EstimatorConfig batchDesignConfig(EstimatorConfig c) {
+  c.pc_truncation = c.batchTruncation();
+  c.collocation.points = c.collocation.batchPoints();
+  return c;
+}
+
+bool separateBatchDesign(const EstimatorConfig& c) {
+  return c.batchTruncation().single_from != c.pc_truncation.single_from ||
+         c.collocation.batchPoints() != c.collocation.points;
+}
+
 std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model) {
   ParameterMapping mapping(*model, c.uncertain);

@@ -639,9 +639,14 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   YamlMapReader pc = root.map("pc");
   pc.integer("order", c.pc_order, 0, 20);
   c.pc_truncation = readTruncation(pc);
-  if (!readFlag(pc, "tolerance_interactions", true)) c.pc_truncation.single_from = c.loadCount();
+  const bool interactions = readFlag(pc, "tolerance_interactions", true);
+  if (!interactions) c.pc_truncation.single_from = c.loadCount();
+  const bool batch_given = pc.has("batch_tolerance_interactions");
+  const bool batch_interactions = readFlag(pc, "batch_tolerance_interactions", interactions);
+  if (batch_given) c.batch_tolerance_interactions = batch_interactions;
   pc.finish();
   const std::size_t terms = basisSize(n, c.pc_order, c.pc_truncation);
+  const std::size_t batch_terms = basisSize(n, c.pc_order, c.batchTruncation());
 
   YamlMapReader col = root.map("collocation");
   // auto (the default): plain Halton up to kPlainHaltonMaxDimension germs,
@@ -657,6 +662,10 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   }
   if (seq == "auto") seq = toString(c.collocation.sequence);
   col.integer("points", c.collocation.points, 1, 1000000);
+  const bool batch_points_given = col.has("batch_points");
+  int batch_points = c.collocation.points;
+  col.integer("batch_points", batch_points, 1, 1000000);
+  if (batch_points_given) c.collocation.batch_points = batch_points;
   col.integer("level", c.collocation.level, 0, 30);
   std::string projection = toString(c.collocation.projection);
   col.text("projection", projection);
@@ -705,6 +714,20 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
     col.fail("points", std::to_string(c.collocation.points),
              "at least S = " + std::to_string(terms) + " collocation points (basis terms for " +
                  std::to_string(n) + " germs, order " + std::to_string(c.pc_order) + ")");
+  }
+  const double batch_q = c.collocation.sequence == PointSequence::kGauss
+                             ? std::pow(c.collocation.batchPoints(), n)
+                             : c.collocation.batchPoints();
+  if (c.collocation.sequence != PointSequence::kSmolyak && batch_q < batch_terms) {
+    col.fail("batch_points", std::to_string(c.collocation.batchPoints()),
+             "at least S = " + std::to_string(batch_terms) +
+                 " collocation points (the batch methods' basis terms for " + std::to_string(n) +
+                 " germs, order " + std::to_string(c.pc_order) + ")");
+  }
+  if (c.collocation.sequence == PointSequence::kGauss && batch_q > kMaxTensorNodes) {
+    col.fail("batch_points", std::to_string(c.collocation.batchPoints()),
+             "at most " + std::to_string(static_cast<int>(kMaxTensorNodes)) +
+                 " tensor Gauss nodes (points^n)");
   }
   col.finish();
 

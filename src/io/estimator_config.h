@@ -112,6 +112,8 @@ struct CollocationConfig {
   std::uint64_t seed = 1;  // scrambled_halton: the scrambling's seed
   double max_condition = 1e8;
   int threads = 0;  // forecast threads; 0 = the machine's cores
+  int batch_points = 0;  // collocation.batch_points, the batch methods' Q; 0: points
+  int batchPoints() const { return batch_points > 0 ? batch_points : points; }
   // Relative leave-one-out error of the forecast above which a warning is raised.
   double loo_warning = 0.1;
   // The count CollocationDesign takes: points, or the level for smolyak.
@@ -216,7 +218,17 @@ struct EstimatorConfig {
   std::string vehicle_file;       // the merged vehicle_file ("" without one)
   double tolerances_prune = 0.0;  // fix tolerances with every total Sobol index below this
   int pc_order = 4;
-  BasisTruncation pc_truncation;  // pc.truncation, pc.q_norm
+  BasisTruncation pc_truncation;  // pc.truncation, pc.q_norm, pc.tolerance_interactions
+  // pc.batch_tolerance_interactions: -1 (absent) as pc.tolerance_interactions,
+  // 0 false, 1 true; the batch methods' basis is batchTruncation().
+  int batch_tolerance_interactions = -1;
+  BasisTruncation batchTruncation() const {
+    BasisTruncation t = pc_truncation;
+    if (batch_tolerance_interactions >= 0) {
+      t.single_from = batch_tolerance_interactions ? -1 : loadCount();
+    }
+    return t;
+  }
   CollocationConfig collocation;
   RoadConfig road;
   SamplingConfig sampling;

@@ -305,9 +305,11 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
   r.samples = static_cast<int>(series.size());
   switch (method) {
     case EstimationMethod::kOneStep: runOneStep(c, series, model, &r); break;
-    case EstimationMethod::kWholeSet: runBatch(c, series, makePropagator(c, model), {1.0}, &r); break;
+    case EstimationMethod::kWholeSet:
+      runBatch(c, series, makePropagator(batchDesignConfig(c), model), {1.0}, &r);
+      break;
     case EstimationMethod::kEsMda:
-      runBatch(c, series, makePropagator(c, model), c.es_mda.alphas, &r);
+      runBatch(c, series, makePropagator(batchDesignConfig(c), model), c.es_mda.alphas, &r);
       break;
     case EstimationMethod::kEnkf: runEnkf(c, series, model, seed, progress, &r); break;
     case EstimationMethod::kGrid: runGrid(c, series, model, progress, grid_cache, &r); break;

@@ -17,7 +17,10 @@ std::vector<double> sampleTimes(const MeasurementSeries& series) {
 PriorSensitivity recordSensitivity(const EstimatorConfig& c,
                                    std::shared_ptr<const MechanicalModel> model,
                                    const std::vector<double>& times) {
-  const auto propagator = makePropagator(c, std::move(model));
+  // A prior forecast over the record, as the batch methods': their design
+  // (pc.batch_tolerance_interactions keeps the tolerances' products, which
+  // the total indices count).
+  const auto propagator = makePropagator(batchDesignConfig(c), std::move(model));
   return priorSensitivity(*propagator, times, channelIndices(c));
 }
 

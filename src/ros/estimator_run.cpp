@@ -203,7 +203,13 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   const MeasurementSeries series = batch_series_.series();
   // estimate_offline's policy (runBatchEstimate); the node adds only what it
   // publishes: nothing for a non-finite result or a failed forecast.
-  const BatchOutcome o = runBatchEstimate(config_, *propagator_, series, alphas);
+  // The batch methods' own design when configured (collocation.batch_points,
+  // pc.batch_tolerance_interactions), built per call on the filter's model.
+  const std::shared_ptr<const PcPropagator> propagator =
+      separateBatchDesign(config_)
+          ? makePropagator(batchDesignConfig(config_), propagator_->modelPointer())
+          : propagator_;
+  const BatchOutcome o = runBatchEstimate(config_, *propagator, series, alphas);
   const BatchResult& b = o.result;
   const bool finite =
       b.finite && b.mean.allFinite() && b.stddev.allFinite() && b.coefficients.allFinite();
@@ -223,8 +229,8 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   msg.time = batch_series_.back().time;
   msg.method = method;
   msg.update_rule = toString(config_.update);
-  setParameters(msg, propagator_->mapping(), b.mean, b.stddev);
-  setBasis(msg, propagator_->basis());
+  setParameters(msg, propagator->mapping(), b.mean, b.stddev);
+  setBasis(msg, propagator->basis());
   setCoefficients(msg, b.coefficients);
   msg.nis = b.nis;
   msg.nis_channels = static_cast<std::uint32_t>(b.observations);

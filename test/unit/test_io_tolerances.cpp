@@ -3,6 +3,7 @@
 // bad input refused with a message naming the key.
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
 #include <filesystem>
 #include <fstream>
@@ -10,7 +11,9 @@
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/io/vehicle_file.h"
+#include "pc_ekf/pc/basis_truncation.h"
 
 namespace pc_ekf {
 namespace {
@@ -206,6 +209,70 @@ TEST(VehicleLive, ToleranceOnEveryVehicleValue) {
   }
   EXPECT_EQ(c.loadCount(), 2);
   }
+}
+
+// vehicle_live.yaml: the one-step filter on the basis without tolerance
+// products (S = 58, Q = 116), the batch methods on total degree (S = 136,
+// Q = 306): ES-MDA gives, to the last bit, what it gives with total degree
+// and Q = 306 for both, and the one-step filter's coefficients have 58 terms.
+TEST(BatchDesign, EsMdaOnItsOwnDesignOneStepOnTheSparseBasis) {
+  YAML::Node split = YAML::LoadFile(kDir + "vehicle_live.yaml");
+  split["road"] = YAML::Load("{source: speed_bump}");
+  split["sampling"] = YAML::Load("{samples: 12, duration: 0.36}");
+  split["pdf"]["draws"] = 200;
+  YAML::Node full = YAML::Clone(split);
+  full["pc"].remove("batch_tolerance_interactions");
+  full["pc"]["tolerance_interactions"] = true;
+  full["collocation"].remove("batch_points");
+  full["collocation"]["points"] = 306;
+
+  const EstimatorConfig a = parseConfig(split, "split.yaml");
+  const EstimatorConfig b = parseConfig(full, "full.yaml");
+  ASSERT_EQ(a.uncertain.size(), 15u);
+  EXPECT_EQ(truncatedMultiIndices(15, 2, a.pc_truncation).size(), 58u);
+  EXPECT_EQ(truncatedMultiIndices(15, 2, a.batchTruncation()).size(), 136u);
+  EXPECT_EQ(a.collocation.points, 116);
+  EXPECT_EQ(a.collocation.batchPoints(), 306);
+  EXPECT_TRUE(separateBatchDesign(a));
+  EXPECT_FALSE(separateBatchDesign(b));
+  // Unset, the batch design follows the one-step filter's, also when a
+  // program changes it after parsing.
+  EstimatorConfig d = b;
+  d.collocation.points = 200;
+  d.pc_truncation.single_from = 2;
+  EXPECT_EQ(batchDesignConfig(d).collocation.points, 200);
+  EXPECT_EQ(batchDesignConfig(d).pc_truncation.single_from, 2);
+  EXPECT_FALSE(separateBatchDesign(d));
+
+  const auto model = makeModel(a, makeRoad(a));
+  const MeasurementSeries data = synthesizeFromConfig(a, *model, 3);
+  const OfflineResult ea = runOfflineEstimation(a, data, model, EstimationMethod::kEsMda, 3);
+  const OfflineResult eb = runOfflineEstimation(b, data, model, EstimationMethod::kEsMda, 3);
+  ASSERT_EQ(ea.parameters.size(), eb.parameters.size());
+  for (std::size_t i = 0; i < ea.parameters.size(); ++i) {
+    EXPECT_EQ(ea.parameters[i].mean, eb.parameters[i].mean) << ea.parameters[i].name;
+    EXPECT_EQ(ea.parameters[i].stddev, eb.parameters[i].stddev) << ea.parameters[i].name;
+  }
+  EXPECT_EQ(ea.records.back().coefficients.cols(), 136);
+  const OfflineResult oa = runOfflineEstimation(a, data, model, EstimationMethod::kOneStep, 3);
+  EXPECT_EQ(oa.records.back().coefficients.cols(), 58);
+}
+
+TEST(BatchDesign, TooFewBatchPointsAreRefusedByName) {
+  // n = 5, p = 2: total degree S = 21; one tolerance germ per term: S = 6 + 3 * 4 = 18.
+  const std::string sparse = "pc: {order: 2, tolerance_interactions: false, "
+                             "batch_tolerance_interactions: true}\n";
+  const std::string base = std::string(PC_EKF_LOAD_ENTRIES) +
+                           "tolerances: {spring_linear_left: 0.1, spring_linear_right: 0.1, "
+                           "damping_left: 0.2}\n" + sparse;
+  EXPECT_NE(errorOf(base + "collocation: {points: 36, batch_points: 20}\n")
+                .find("collocation.batch_points"),
+            std::string::npos);
+  EXPECT_EQ(errorOf(base + "collocation: {points: 36, batch_points: 21}\n"), "");
+  EXPECT_EQ(errorOf(base + "collocation: {points: 18, batch_points: 42}\n"), "");
+  EXPECT_NE(errorOf(base + "collocation: {points: 17, batch_points: 42}\n")
+                .find("collocation.points"),
+            std::string::npos);
 }
 
 }  // namespace
