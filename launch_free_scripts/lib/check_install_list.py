@@ -24,6 +24,8 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
+import junit
+
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 # rosdep keys in package.xml that are not ROS packages: a file each provides.
@@ -200,25 +202,19 @@ def check(uses, covered):
 def main():
     out, listed = sys.argv[1], sys.argv[2:]
     covered = closure(listed)
-    suite = ET.Element("testsuite", name="install_list")
-    failures = 0
+    cases = []
     for name, uses in (("package_xml", package_xml_uses()), ("commands", command_uses()),
                        ("python_modules", python_module_uses())):
         problems, lines = check(uses, covered)
-        case = ET.SubElement(suite, "testcase", classname="install_list", name=name)
-        ET.SubElement(case, "system-out").text = "\n".join(lines)
+        case = junit.Case(name, system_out="\n".join(lines))
         if problems:
-            failures += 1
-            ET.SubElement(case, "failure", message=f"{len(problems)} not covered").text = \
-                "\n".join(problems)
+            case.failure, case.failure_text = f"{len(problems)} not covered", "\n".join(problems)
             for p in problems:
                 print(f"install list: {p}", file=sys.stderr)
+        cases.append(case)
         print(f"install_list.{name}: {len(uses)} checked, {len(problems)} not covered",
               file=sys.stderr)
-    suite.set("tests", "3")
-    suite.set("failures", str(failures))
-    ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
-    sys.exit(1 if failures else 0)
+    sys.exit(1 if junit.write(out, "install_list", cases) else 0)
 
 
 if __name__ == "__main__":

@@ -44,6 +44,14 @@ PC_EKF_APT_PACKAGES=(
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }
 
+# The scripts' own JUnit results (test.sh counts them): one test case,
+#   pc_ekf_junit OUT.xml SUITE CASE [--time S] [--system-out FILE]
+#                [--failure MESSAGE] [--failure-text FILE] [--tail N]
+# (an empty MESSAGE is a pass). Python callers import lib/junit.py with
+# PYTHONPATH=$PC_EKF_JUNIT_PATH.
+PC_EKF_JUNIT_PATH=$PC_EKF_ROOT/launch_free_scripts/lib
+pc_ekf_junit() { /usr/bin/python3 "$PC_EKF_JUNIT_PATH/junit.py" "$@"; }
+
 # Installs whatever of PC_EKF_APT_PACKAGES (plus "$@") is missing.
 pc_ekf_ensure_packages() {
   local missing=() p
