@@ -233,6 +233,11 @@ EstimatorConfig loadConfigFile(const std::string& path,
                                const ModelRegistry& models = ModelRegistry::builtins());
 EstimatorConfig parseConfig(const YAML::Node& root, const std::string& source_name,
                             const ModelRegistry& models = ModelRegistry::builtins());
+// The identity of a config file (config_identity.h) as estimator_node's
+// checkpoints hold it: the config merged with its vehicle file's contents.
+// The file is checked as loadConfigFile does (throws ConfigError).
+std::uint64_t configFileHash(const std::string& path,
+                             const ModelRegistry& models = ModelRegistry::builtins());
 EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name,
                                   const ModelRegistry& models = ModelRegistry::builtins());
 
