@@ -9,7 +9,8 @@ by a Debian package in the closure of that list. For each thing used:
     rosdep keys via a header or library they provide),
   - every command README.md, docs/*.md and the scripts run (ros*, catkin_*, colcon,
     `rosrun nodelet nodelet`, compilers and helpers),
-  - every Python module imported by launch_free_scripts/lib/*.py and scripts/*,
+  - every Python module imported by launch_free_scripts/lib/*.py, scripts/*,
+    estimate_fleet's package (scripts/pc_ekf_fleet) and its tests (test/fleet),
 this finds the file it resolves to, the Debian package owning it (`dpkg -S`),
 and fails naming that package when it is neither listed nor pulled in
 (`apt-cache depends --recurse --installed` of the list). Something that does
@@ -139,9 +140,12 @@ def command_uses():
 
 
 def python_sources():
-    """launch_free_scripts/lib/*.py and the Python programs in scripts/."""
-    lib = os.path.join(ROOT, "launch_free_scripts", "lib")
-    paths = [os.path.join(lib, n) for n in sorted(os.listdir(lib)) if n.endswith(".py")]
+    """launch_free_scripts/lib/*.py, the Python programs in scripts/, the
+    package scripts/pc_ekf_fleet and its tests (test/fleet)."""
+    paths = []
+    for folder in (("launch_free_scripts", "lib"), ("scripts", "pc_ekf_fleet"), ("test", "fleet")):
+        folder = os.path.join(ROOT, *folder)
+        paths += [os.path.join(folder, n) for n in sorted(os.listdir(folder)) if n.endswith(".py")]
     scripts = os.path.join(ROOT, "scripts")
     for name in sorted(os.listdir(scripts)) if os.path.isdir(scripts) else []:
         path = os.path.join(scripts, name)
@@ -162,7 +166,7 @@ def python_module_uses():
                 modules.update(a.name.split(".")[0] for a in node.names)
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
                 modules.add(node.module.split(".")[0])
-    modules -= local | {"pc_ekf"}  # this package's own (generated) modules
+    modules -= local | {"pc_ekf", "pc_ekf_fleet"}  # this package's own modules
     probe = ("import importlib.util, sys\n"
              "for m in sys.argv[1:]:\n"
              "    s = importlib.util.find_spec(m)\n"

@@ -39,7 +39,8 @@ PC_EKF_APT_PACKAGES=(
   nlohmann-json3-dev             # estimate_offline's JSON output
   clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
   ccache                         # compiler cache: clones and worktrees on one machine share objects
-  python3-distributed            # scripts/estimate_fleet: Dask (dask-scheduler, dask-worker, client)
+  python3-distributed            # scripts/estimate_fleet: Dask (dask-scheduler, dask-worker, client); optional at run time
+  python3-pytest                 # test.sh: estimate_fleet's modules (test/fleet)
 )
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }
