@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # THE test command: installs what is missing, builds, runs every gtest and
 # rostest, checks the install space (an outside package builds against it),
-# catkin_lint (no errors) and that the install list covers every package used
+# catkin_lint (no errors), estimate_fleet (lib/fleet_test.sh; its modules with
+# pytest, test/fleet) and that the install list covers every package used
 # (lib/check_install_list.py), and ends with "N passed, N failed" (N = test cases).
 #   --colcon     also check that `colcon build` succeeds (separate workspace)
 #   --sanitize   instead: build .build/catkin_ws_sanitize with ASan + UBSan
@@ -26,7 +27,7 @@ for arg in "$@"; do
     --colcon) check_colcon=1 ;;
     --sanitize) sanitize=1; fuzz=0 ;;
     --no-fuzz) fuzz=0 ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,14p' "$0"; exit 0 ;;
     *) echo "test.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
@@ -77,6 +78,16 @@ fi
 # the LocalCluster path, resume after a killed run, --redo-errors (lib/fleet_test.sh).
 [ "$sanitize" -eq 0 ] && { bash "$here/lib/fleet_test.sh" "$results" ||
                              pc_ekf_log "fleet test FAILED (log: .build/fleet/)"; }
+
+# estimate_fleet's modules without Dask (scripts/pc_ekf_fleet; test/fleet, pytest).
+if [ "$sanitize" -eq 0 ] &&
+   ! (cd "$PC_EKF_ROOT" && /usr/bin/python3 -m pytest -q -p no:cacheprovider \
+        --junitxml="$results/fleet_unit.xml" test/fleet) >"$PC_EKF_ROOT/.build/pytest.log" 2>&1; then
+  pc_ekf_log "fleet pytest FAILED (log: .build/pytest.log)"
+  [ -f "$results/fleet_unit.xml" ] ||
+    pc_ekf_junit "$results/fleet_unit.xml" fleet_unit pytest --failure "pytest wrote no results" \
+      --failure-text "$PC_EKF_ROOT/.build/pytest.log" --tail 4000
+fi
 
 # The install list covers every package used (a fresh machine has only it).
 mkdir -p "$results"

@@ -9,7 +9,8 @@ by a Debian package in the closure of that list. For each thing used:
     rosdep keys via a header or library they provide),
   - every command README.md, docs/*.md and the scripts run (ros*, catkin_*, colcon,
     `rosrun nodelet nodelet`, compilers and helpers),
-  - every Python module imported by launch_free_scripts/lib/*.py and scripts/*,
+  - every Python module imported by launch_free_scripts/lib/*.py, scripts/*,
+    estimate_fleet's package (scripts/pc_ekf_fleet) and its tests (test/fleet),
 this finds the file it resolves to, the Debian package owning it (`dpkg -S`),
 and fails naming that package when it is neither listed nor pulled in
 (`apt-cache depends --recurse --installed` of the list). Something that does
@@ -23,6 +24,8 @@ import shutil
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+
+import junit
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
@@ -137,9 +140,12 @@ def command_uses():
 
 
 def python_sources():
-    """launch_free_scripts/lib/*.py and the Python programs in scripts/."""
-    lib = os.path.join(ROOT, "launch_free_scripts", "lib")
-    paths = [os.path.join(lib, n) for n in sorted(os.listdir(lib)) if n.endswith(".py")]
+    """launch_free_scripts/lib/*.py, the Python programs in scripts/, the
+    package scripts/pc_ekf_fleet and its tests (test/fleet)."""
+    paths = []
+    for folder in (("launch_free_scripts", "lib"), ("scripts", "pc_ekf_fleet"), ("test", "fleet")):
+        folder = os.path.join(ROOT, *folder)
+        paths += [os.path.join(folder, n) for n in sorted(os.listdir(folder)) if n.endswith(".py")]
     scripts = os.path.join(ROOT, "scripts")
     for name in sorted(os.listdir(scripts)) if os.path.isdir(scripts) else []:
         path = os.path.join(scripts, name)
@@ -160,7 +166,7 @@ def python_module_uses():
                 modules.update(a.name.split(".")[0] for a in node.names)
             elif isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
                 modules.add(node.module.split(".")[0])
-    modules -= local | {"pc_ekf"}  # this package's own (generated) modules
+    modules -= local | {"pc_ekf", "pc_ekf_fleet"}  # this package's own modules
     probe = ("import importlib.util, sys\n"
              "for m in sys.argv[1:]:\n"
              "    s = importlib.util.find_spec(m)\n"
@@ -200,25 +206,19 @@ def check(uses, covered):
 def main():
     out, listed = sys.argv[1], sys.argv[2:]
     covered = closure(listed)
-    suite = ET.Element("testsuite", name="install_list")
-    failures = 0
+    cases = []
     for name, uses in (("package_xml", package_xml_uses()), ("commands", command_uses()),
                        ("python_modules", python_module_uses())):
         problems, lines = check(uses, covered)
-        case = ET.SubElement(suite, "testcase", classname="install_list", name=name)
-        ET.SubElement(case, "system-out").text = "\n".join(lines)
+        case = junit.Case(name, system_out="\n".join(lines))
         if problems:
-            failures += 1
-            ET.SubElement(case, "failure", message=f"{len(problems)} not covered").text = \
-                "\n".join(problems)
+            case.failure, case.failure_text = f"{len(problems)} not covered", "\n".join(problems)
             for p in problems:
                 print(f"install list: {p}", file=sys.stderr)
+        cases.append(case)
         print(f"install_list.{name}: {len(uses)} checked, {len(problems)} not covered",
               file=sys.stderr)
-    suite.set("tests", "3")
-    suite.set("failures", str(failures))
-    ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
-    sys.exit(1 if failures else 0)
+    sys.exit(1 if junit.write(out, "install_list", cases) else 0)
 
 
 if __name__ == "__main__":

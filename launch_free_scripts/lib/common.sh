@@ -39,10 +39,19 @@ PC_EKF_APT_PACKAGES=(
   nlohmann-json3-dev             # estimate_offline's JSON output
   clang libclang-rt-14-dev llvm  # fuzz targets: clang, libFuzzer + ASan/UBSan runtimes, llvm-symbolizer
   ccache                         # compiler cache: clones and worktrees on one machine share objects
-  python3-distributed            # scripts/estimate_fleet: Dask (dask-scheduler, dask-worker, client)
+  python3-distributed            # scripts/estimate_fleet: Dask (dask-scheduler, dask-worker, client); optional at run time
+  python3-pytest                 # test.sh: estimate_fleet's modules (test/fleet)
 )
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }
+
+# The scripts' own JUnit results (test.sh counts them): one test case,
+#   pc_ekf_junit OUT.xml SUITE CASE [--time S] [--system-out FILE]
+#                [--failure MESSAGE] [--failure-text FILE] [--tail N]
+# (an empty MESSAGE is a pass). Python callers import lib/junit.py with
+# PYTHONPATH=$PC_EKF_JUNIT_PATH.
+PC_EKF_JUNIT_PATH=$PC_EKF_ROOT/launch_free_scripts/lib
+pc_ekf_junit() { /usr/bin/python3 "$PC_EKF_JUNIT_PATH/junit.py" "$@"; }
 
 # Installs whatever of PC_EKF_APT_PACKAGES (plus "$@") is missing.
 pc_ekf_ensure_packages() {

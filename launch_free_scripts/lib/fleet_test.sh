@@ -250,18 +250,17 @@ run_case local_cluster_resume_after_killed_fleet case_resume
 run_case redo_errors case_redo
 pc_ekf_stop_owned
 pc_ekf_log "fleet: $((SECONDS - started_all)) s (logs: .build/fleet/)"
-/usr/bin/python3 - "$results/fleet.xml" "$cases" "$work" <<'PY'
-import sys, xml.etree.ElementTree as ET
+PYTHONPATH=$PC_EKF_JUNIT_PATH /usr/bin/python3 - "$results/fleet.xml" "$cases" "$work" <<'PY'
+import sys
+import junit
 out, cases, work = sys.argv[1:]
 rows = [l.rstrip("\n").split("\t") for l in open(cases) if l.strip()]
-suite = ET.Element("testsuite", name="fleet", tests=str(len(rows)),
-                   failures=str(sum(1 for r in rows if r[1] != "0")))
+written = []
 for name, status, elapsed in rows:
-    case = ET.SubElement(suite, "testcase", classname="fleet", name=name, time=elapsed)
-    log = open(f"{work}/{name}.log").read()[-4000:]
-    ET.SubElement(case, "system-out").text = log
-    if status != "0":
-        ET.SubElement(case, "failure", message=(log.strip().splitlines() or ["failed"])[-1]).text = log
-ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
+    log = junit.read_tail(f"{work}/{name}.log", 4000)
+    failure = (log.strip().splitlines() or ["failed"])[-1] if status != "0" else None
+    written.append(junit.Case(name, failure=failure, failure_text=log, system_out=log,
+                              time=elapsed))
+junit.write(out, "fleet", written)
 PY
 ! grep -qv $'\t0\t' "$cases"

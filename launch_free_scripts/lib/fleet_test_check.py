@@ -24,6 +24,7 @@ import csv
 import fnmatch
 import json
 import os
+import re
 import sys
 import time
 
@@ -106,7 +107,8 @@ def cmd_table(args):
             vehicle = os.path.abspath(vehicle) if vehicle else ""
             if fnmatch.fnmatch(name, pattern) and row["vehicle_file"] != vehicle:
                 fail(f"{name}: vehicle_file {row['vehicle_file']!r}, expected {vehicle}")
-        if len(row["content_hash"]) != 64 or len(row["config_hash"]) != 64:
+        if (len(row["content_hash"]) != 64 or
+                not re.fullmatch(r"0x[0-9a-f]{16}", row["config_hash"])):  # --config-hash
             fail(f"{name}: content/config hash missing")
     if expected_errors:
         fail(f"no error row for {sorted(expected_errors)}")

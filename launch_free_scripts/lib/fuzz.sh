@@ -137,21 +137,20 @@ pc_ekf_fuzz_ci() {
     done
     for pid in "${pids[@]}"; do wait "$pid"; done
   fi
-  /usr/bin/python3 - "$results/fuzz.xml" "$status_dir" "${PC_EKF_FUZZ_TARGETS[@]}" <<'PY'
-import os, sys, xml.etree.ElementTree as ET
+  PYTHONPATH=$PC_EKF_JUNIT_PATH /usr/bin/python3 - "$results/fuzz.xml" "$status_dir" \
+    "${PC_EKF_FUZZ_TARGETS[@]}" <<'PY'
+import os, sys
+import junit
 out, status_dir, targets = sys.argv[1], sys.argv[2], sys.argv[3:]
-suite = ET.Element("testsuite", name="fuzz", tests=str(len(targets)))
-failures = 0
+cases = []
 for t in targets:
     path = os.path.join(status_dir, t)
     lines = open(path).read().splitlines() if os.path.exists(path) else ["FAILED", "no result"]
-    case = ET.SubElement(suite, "testcase", classname="fuzz", name=t)
-    ET.SubElement(case, "system-out").text = "\n".join(lines[1:])
-    if not lines or lines[0] != "ok":
-        failures += 1
-        ET.SubElement(case, "failure", message="fuzz_%s failed" % t).text = "\n".join(lines[1:])
-suite.set("failures", str(failures))
-ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
+    text = "\n".join(lines[1:])
+    failed = not lines or lines[0] != "ok"
+    cases.append(junit.Case(t, failure="fuzz_%s failed" % t if failed else None,
+                            failure_text=text, system_out=text))
+junit.write(out, "fuzz", cases)
 PY
 }
 

@@ -130,15 +130,6 @@ run
 pc_ekf_stop_owned
 elapsed=$(awk -v a="$started" -v b="$(date +%s.%N)" 'BEGIN { printf "%.1f", b - a }')
 [ -z "$failure" ] && pc_ekf_log "master restart: $(grep -m1 '^first estimate' "$log")"
-/usr/bin/python3 - "$results/master_restart.xml" "$failure" "$log" "$elapsed" <<'PY'
-import sys, xml.etree.ElementTree as ET
-out, failure, log, elapsed = sys.argv[1:]
-suite = ET.Element("testsuite", name="master_restart", tests="1", failures="1" if failure else "0")
-case = ET.SubElement(suite, "testcase", classname="master_restart",
-                     name="estimates_on_the_new_master_with_state_kept", time=elapsed)
-ET.SubElement(case, "system-out").text = open(log).read()[-4000:]
-if failure:
-    ET.SubElement(case, "failure", message=failure).text = open(log).read()[-4000:]
-ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
-PY
+pc_ekf_junit "$results/master_restart.xml" master_restart estimates_on_the_new_master_with_state_kept \
+  --time "$elapsed" --system-out "$log" --failure "$failure" --failure-text "$log" --tail 4000
 [ -z "$failure" ]

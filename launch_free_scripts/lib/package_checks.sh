@@ -34,15 +34,9 @@ pc_ekf_install_check() {
     fi
   fi
   mkdir -p "$results"
-  /usr/bin/python3 - "$results/install_space.xml" "$status" "$why" "$log" <<'PY'
-import sys, xml.etree.ElementTree as ET
-out, status, why, log = sys.argv[1:]
-suite = ET.Element("testsuite", name="install_space", tests="1", failures="0" if status == "ok" else "1")
-case = ET.SubElement(suite, "testcase", classname="install_space", name="downstream_build")
-if status != "ok":
-    ET.SubElement(case, "failure", message=why).text = open(log).read()[-4000:]
-ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
-PY
+  [ "$status" = ok ] && why=""
+  pc_ekf_junit "$results/install_space.xml" install_space downstream_build \
+    --failure "$why" --failure-text "$log" --tail 4000
   [ "$status" = ok ] || pc_ekf_log "install space check FAILED: $why (log: .build/install_check.log)"
 }
 
@@ -51,20 +45,16 @@ PY
 # checked). Writes RESULTS_DIR/catkin_lint.xml.
 pc_ekf_lint_check() {
   local results=$1 log=$PC_EKF_ROOT/.build/catkin_lint.log status=ok
+  local problems=$PC_EKF_ROOT/.build/catkin_lint.problems failure=()
   (cd "$PC_EKF_WS/src" && catkin_lint -W1 --strict .) >"$log" 2>&1 || status=FAILED
   grep -qE ": (error|warning): " "$log" && status=FAILED
   mkdir -p "$results"
-  /usr/bin/python3 - "$results/catkin_lint.xml" "$status" "$log" <<'PY'
-import sys, xml.etree.ElementTree as ET
-out, status, log = sys.argv[1:]
-text = open(log).read()
-suite = ET.Element("testsuite", name="catkin_lint", tests="1", failures="0" if status == "ok" else "1")
-case = ET.SubElement(suite, "testcase", classname="catkin_lint", name="clean")
-ET.SubElement(case, "system-out").text = text
-if status != "ok":
-    problems = [l for l in text.splitlines() if ": error: " in l or ": warning: " in l]
-    ET.SubElement(case, "failure", message="%d catkin_lint errors and warnings" % len(problems)).text = "\n".join(problems) or text[-2000:]
-ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
-PY
+  if [ "$status" != ok ]; then
+    # The failure's text: the errors and warnings, or the log's end without any.
+    grep -E ": (error|warning): " "$log" >"$problems" || tail -c 2000 "$log" >"$problems"
+    failure=(--failure "$(grep -cE ": (error|warning): " "$log") catkin_lint errors and warnings"
+             --failure-text "$problems")
+  fi
+  pc_ekf_junit "$results/catkin_lint.xml" catkin_lint clean --system-out "$log" "${failure[@]}"
   [ "$status" = ok ] || pc_ekf_log "catkin_lint FAILED (log: .build/catkin_lint.log)"
 }

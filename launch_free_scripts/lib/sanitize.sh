@@ -34,8 +34,9 @@ pc_ekf_sanitize_env() {
 # in TEXT_LOG... and LOG_DIR/ros_log.
 #   pc_ekf_sanitize_results RESULTS LOG_DIR [TEXT_LOG...]
 pc_ekf_sanitize_results() {
-  /usr/bin/python3 - "$1/sanitizer.xml" "$2" "${@:3}" <<'PY'
-import glob, os, re, sys, xml.etree.ElementTree as ET
+  PYTHONPATH=$PC_EKF_JUNIT_PATH /usr/bin/python3 - "$1/sanitizer.xml" "$2" "${@:3}" <<'PY'
+import glob, os, re, sys
+import junit
 out, logs, texts = sys.argv[1], sys.argv[2], sys.argv[3:]
 texts += [p for p in glob.glob(os.path.join(logs, "ros_log", "**"), recursive=True) if os.path.isfile(p)]
 found = []  # (where, summary lines)
@@ -48,12 +49,11 @@ for path in texts:
     for i, l in enumerate(lines):
         if "runtime error:" in l:
             found.append(("%s line %d" % (path, i + 1), lines[i:i + 6]))
-suite = ET.Element("testsuite", name="sanitizer", tests="1", failures=str(int(bool(found))))
-case = ET.SubElement(suite, "testcase", classname="sanitizer", name="reports")
+case = junit.Case("reports")
 if found:
-    text = "\n".join("%s:\n  %s" % (where, "\n  ".join(keep)) for where, keep in found)
-    ET.SubElement(case, "failure", message="%d sanitizer report(s)" % len(found)).text = text
-    print(text)
-ET.ElementTree(suite).write(out, encoding="utf-8", xml_declaration=True)
+    case.failure = "%d sanitizer report(s)" % len(found)
+    case.failure_text = "\n".join("%s:\n  %s" % (where, "\n  ".join(keep)) for where, keep in found)
+    print(case.failure_text)
+junit.write(out, "sanitizer", [case])
 PY
 }

@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "pc_ekf/io/config_identity.h"
 #include "pc_ekf/io/tolerances.h"
 #include "pc_ekf/io/vehicle_file.h"
 #include "pc_ekf/io/yaml_reader.h"
@@ -817,7 +818,10 @@ EstimatorConfig parseConfigString(const std::string& yaml_text, const std::strin
   return parseConfig(node, source_name, models);
 }
 
-EstimatorConfig loadConfigFile(const std::string& path, const ModelRegistry& models) {
+namespace {
+
+// The file's YAML with its vehicle_file: made absolute (relative to the file).
+YAML::Node loadConfigYaml(const std::string& path) {
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open the configuration file");
   std::stringstream text;
@@ -830,7 +834,19 @@ EstimatorConfig loadConfigFile(const std::string& path, const ModelRegistry& mod
                       ": not valid YAML (" + e.msg + ")");
   }
   anchorVehicleFile(node, path);
-  return parseConfig(node, path, models);
+  return node;
+}
+
+}  // namespace
+
+EstimatorConfig loadConfigFile(const std::string& path, const ModelRegistry& models) {
+  return parseConfig(loadConfigYaml(path), path, models);
+}
+
+std::uint64_t configFileHash(const std::string& path, const ModelRegistry& models) {
+  const YAML::Node node = loadConfigYaml(path);
+  parseConfig(node, path, models);
+  return fnv1a64(canonicalConfigText(mergeVehicleFile(node, path, nullptr)));
 }
 
 }  // namespace pc_ekf

@@ -16,6 +16,7 @@
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/filter/update_safeguards.h"
+#include "pc_ekf/io/config_error.h"
 #include "pc_ekf/io/model_type.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/road_input.h"
@@ -29,13 +30,6 @@ class Node;
 }
 
 namespace pc_ekf {
-
-// Bad configuration: the message names the source, the key, the value and
-// what was expected.
-class ConfigError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
 
 // kIso8608 and kProfile: roads by distance driven at a speed (road_profile.h);
 // kNone: no road is known (road-free estimation, docs/method.md §4.10).
@@ -254,6 +248,11 @@ EstimatorConfig loadConfigFile(const std::string& path,
                                const ModelRegistry& models = ModelRegistry::builtins());
 EstimatorConfig parseConfig(const YAML::Node& root, const std::string& source_name,
                             const ModelRegistry& models = ModelRegistry::builtins());
+// The identity of a config file (config_identity.h) as estimator_node's
+// checkpoints hold it: the config merged with its vehicle file's contents.
+// The file is checked as loadConfigFile does (throws ConfigError).
+std::uint64_t configFileHash(const std::string& path,
+                             const ModelRegistry& models = ModelRegistry::builtins());
 EstimatorConfig parseConfigString(const std::string& yaml_text, const std::string& source_name,
                                   const ModelRegistry& models = ModelRegistry::builtins());
 

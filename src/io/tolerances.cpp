@@ -8,7 +8,6 @@
 #include <set>
 #include <stdexcept>
 
-#include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/yaml_reader.h"
 
 namespace pc_ekf {

@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <sstream>
 
-#include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/yaml_reader.h"
 
 namespace pc_ekf {

@@ -4,7 +4,6 @@
 #include <limits>
 #include <sstream>
 
-#include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/number_text.h"
 
 namespace pc_ekf {

@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/io/config_error.h"
+
 namespace pc_ekf {
 
 // One key a YamlMapReader was asked for: its full path (list items as

@@ -4,6 +4,7 @@
 #include <iostream>
 #include <string>
 
+#include "pc_ekf/io/config_identity.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/offline_estimation.h"
@@ -17,8 +18,11 @@ const char* kUsage =
     "                        [--method one_step|whole_set|es_mda|enkf|grid]\n"
     "                        [--update paper|square_root] [--seed N] [--out DIR]\n"
     "                        [--sensitivity]\n"
+    "       estimate_offline --config FILE.yaml --config-hash\n"
     "  --sensitivity: total Sobol indices of every uncertain parameter on each observed\n"
-    "  channel (prior forecast over the record), a ranked table on stderr and in the JSON\n";
+    "  channel (prior forecast over the record), a ranked table on stderr and in the JSON\n"
+    "  --config-hash: only check the config and print its identity (0x + 16 hex digits:\n"
+    "  the config with its vehicle file's contents, as the node's checkpoints hold it)\n";
 
 }  // namespace
 
@@ -27,13 +31,17 @@ int main(int argc, char** argv) {
   CommandLine args("estimate_offline", kUsage);
   const int parsed = args.parse(
       argc, argv, {"--config", "--measurements", "--bag", "--method", "--update", "--seed", "--out"},
-      {"--sensitivity"});
+      {"--sensitivity", "--config-hash"});
   if (parsed >= 0) return parsed;
   if (!args.has("--config")) return args.badInput(std::string("--config is required\n") + kUsage);
   if (args.has("--measurements") && args.has("--bag")) {
     return args.badInput("give either --measurements or --bag, not both");
   }
   return args.run([&] {
+    if (args.has("--config-hash")) {
+      std::cout << hashText(configFileHash(args["--config"], modelRegistryOnDemand())) << "\n";
+      return 0;
+    }
     EstimatorConfig config = loadConfigFile(args["--config"], modelRegistryOnDemand());
     if (args.has("--update")) config.update = updateRuleFromString(args["--update"]);
     const EstimationMethod method =

@@ -150,6 +150,26 @@ TEST(VehicleFile, MergedRelativeToTheConfigTheFileWins) {
   std::filesystem::remove_all(dir);
 }
 
+// configFileHash (estimate_offline --config-hash, estimate_fleet's rows): the
+// vehicle file's contents count, not its name or where they are written.
+TEST(VehicleFile, ConfigHashCoversTheFileContents) {
+  const auto dir = tempDir();
+  std::ofstream(dir / "a.yaml") << "vehicle: {bar_mass: 600}\n";
+  std::ofstream(dir / "b.yaml") << "vehicle: {bar_mass: 600}\n";
+  std::ofstream(dir / "c.yaml") << "vehicle: {bar_mass: 601}\n";
+  std::ofstream(dir / "via_a.yaml") << kLoad << "vehicle_file: a.yaml\n";
+  std::ofstream(dir / "via_b.yaml") << kLoad << "vehicle_file: b.yaml\n";
+  std::ofstream(dir / "via_c.yaml") << kLoad << "vehicle_file: c.yaml\n";
+  std::ofstream(dir / "inline.yaml") << kLoad << "vehicle: {bar_mass: 600}\n";
+  const auto hash = [&](const char* name) { return configFileHash((dir / name).string()); };
+  EXPECT_EQ(hash("via_a.yaml"), hash("via_b.yaml"));
+  EXPECT_EQ(hash("via_a.yaml"), hash("inline.yaml"));
+  EXPECT_NE(hash("via_a.yaml"), hash("via_c.yaml"));
+  std::ofstream(dir / "bad.yaml") << kLoad << "vehicle: {bar_mass: -3}\n";
+  EXPECT_THROW(hash("bad.yaml"), ConfigError);  // checked like loadConfigFile
+  std::filesystem::remove_all(dir);
+}
+
 TEST(VehicleFile, BadFilesAreNamed) {
   const auto dir = tempDir();
   const auto load = [&](const std::string& file_text, const std::string& key) {
