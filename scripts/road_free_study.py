@@ -62,6 +62,18 @@ def config_text(road, duration, zero, vehicle, mass, position, seed):
     return text[:start] + truth + text[end:]
 
 
+def estimate(exe, tmp, text, method, seed):
+    """estimate_offline on the config text: its JSON and its parameters by name."""
+    cfg = os.path.join(tmp, "c.yaml")
+    open(cfg, "w").write(text)
+    out = subprocess.run([exe, "--config", cfg, "--method", method, "--seed", str(seed)],
+                         capture_output=True, text=True)
+    if out.returncode != 0:
+        sys.exit(out.stderr)
+    d = json.loads(out.stdout)
+    return d, {q["name"]: q for q in d["parameters"]}
+
+
 def car_config_text(road, duration, zero, vehicle, load, seed, accel_y=True):
     """full_car_live.yaml with the road unknown, the IMU channels and a synthetic truth."""
     text = open(os.path.join(ROOT, "config", "full_car_live.yaml")).read()
@@ -114,16 +126,9 @@ def main():
                     for vehicle in (False, True):
                         for mass, position in LOADS:
                             for seed in range(1, a.seeds + 1):
-                                cfg = os.path.join(tmp, "c.yaml")
-                                open(cfg, "w").write(config_text(road, duration, zero, vehicle,
-                                                                 mass, position, seed))
-                                out = subprocess.run([exe, "--config", cfg, "--method", method,
-                                                      "--seed", str(seed)],
-                                                     capture_output=True, text=True)
-                                if out.returncode != 0:
-                                    sys.exit(out.stderr)
-                                d = json.loads(out.stdout)
-                                p = {q["name"]: q for q in d["parameters"]}
+                                d, p = estimate(exe, tmp, config_text(road, duration, zero, vehicle,
+                                                                      mass, position, seed),
+                                                method, seed)
                                 off = max(abs(p["added_mass"]["mean"] - mass) / p["added_mass"]["stddev"],
                                           abs(p["added_mass_position"]["mean"] - position) /
                                           p["added_mass_position"]["stddev"])
@@ -158,17 +163,9 @@ def full_car(a):
                     for vehicle in (False, True):
                         for load in CAR_LOADS:
                             for seed in range(1, a.seeds + 1):
-                                cfg = os.path.join(tmp, "c.yaml")
-                                open(cfg, "w").write(car_config_text(road, duration, zero, vehicle,
-                                                                     load, seed,
-                                                                     not a.without_accel_y))
-                                out = subprocess.run([exe, "--config", cfg, "--method", method,
-                                                      "--seed", str(seed)],
-                                                     capture_output=True, text=True)
-                                if out.returncode != 0:
-                                    sys.exit(out.stderr)
-                                d = json.loads(out.stdout)
-                                p = {q["name"]: q for q in d["parameters"]}
+                                d, p = estimate(exe, tmp, car_config_text(
+                                    road, duration, zero, vehicle, load, seed,
+                                    not a.without_accel_y), method, seed)
                                 off = max(abs(p[n]["mean"] - v) / p[n]["stddev"]
                                           for n, v in zip(names, load))
                                 runs += 1
