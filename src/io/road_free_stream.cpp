@@ -91,11 +91,13 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     const auto it = std::find(input_channels_.begin(), input_channels_.end(), m.channels[j]);
     if (it != input_channels_.end()) in[it - input_channels_.begin()] = m.values[static_cast<Eigen::Index>(j)];
   }
-  std::vector<Blend> blended = blends_;
-  for (Blend& b : blended) blendTravel(b, m.time, &in);
+  // The blends' next state, kept only if the sample is taken (the scratch's
+  // capacity is reused: nothing allocated per sample).
+  blend_next_ = blends_;
+  for (Blend& b : blend_next_) blendTravel(b, m.time, &in);
   const std::string problem = inputs_->append(m.time, in.data());
   if (!problem.empty()) return problem;
-  blends_ = std::move(blended);
+  blends_.swap(blend_next_);
   ++samples_;
   Measurement o = onlyChannels(m, outputs_);
   for (std::size_t j = 0; j < o.channels.size(); ++j) {

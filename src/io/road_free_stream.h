@@ -65,7 +65,7 @@ class RoadFreeStream {
   std::vector<int> outputs_;          // ascending model channels
   Eigen::VectorXd absolute_, relative_;  // each input's noise (a blended travel's: after the blend)
   double blend_ = 0.0;                   // measurement.travel_blend (s)
-  std::vector<Blend> blends_;
+  std::vector<Blend> blends_, blend_next_;
   int accel_z_ = -1;
   double accel_z_sum_ = 0.0;
   long accel_z_count_ = 0;
