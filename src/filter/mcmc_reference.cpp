@@ -33,7 +33,15 @@ void validate(const PosteriorResidual& residual, const std::vector<GermSpec>& pr
     throw std::invalid_argument(
         "runMcmcReference: need chains >= 2, thin >= 1, samples >= 8 thin and start_spread >= 0");
   }
-  if (s.sampler == McmcSampler::kEnsemble) {
+  if (s.sampler == McmcSampler::kConditionalLaplace) {
+    if (s.ridge_dimensions < -1 || s.ridge_dimensions > 3 || s.ridge_dimensions > n ||
+        (s.grid_points != 0 && s.grid_points < 3) || !(s.grid_drop > 0.0)) {
+      throw std::invalid_argument(
+          "runMcmcReference: the conditional Laplace needs ridge_dimensions -1 (automatic) or in "
+          "[0, min(3, n)], "
+          "grid_points >= 3 and grid_drop > 0");
+    }
+  } else if (s.sampler == McmcSampler::kEnsemble) {
     if (s.chains % 2 != 0 || s.chains < 2 * n || !(s.stretch > 1.0) || s.burn_in < 0) {
       throw std::invalid_argument(
           "runMcmcReference: the ensemble needs an even number of walkers (chains) >= 2 n = " +
@@ -46,25 +54,6 @@ void validate(const PosteriorResidual& residual, const std::vector<GermSpec>& pr
         "runMcmcReference: need adapt_every >= 1, burn_in >= 2 adapt_every and "
         "target_acceptance in (0, 1)");
   }
-}
-
-// Log posterior per column; columns outside the prior's support are not simulated.
-Eigen::VectorXd logPosterior(const PosteriorResidual& residual, const PriorDensity& prior,
-                             const Eigen::MatrixXd& xi) {
-  Eigen::VectorXd out = prior.logDensities(xi);
-  std::vector<Eigen::Index> live;
-  for (Eigen::Index j = 0; j < xi.cols(); ++j) {
-    if (std::isfinite(out[j])) live.push_back(j);
-  }
-  if (live.empty()) return out;
-  Eigen::MatrixXd batch(xi.rows(), static_cast<Eigen::Index>(live.size()));
-  for (std::size_t i = 0; i < live.size(); ++i) batch.col(i) = xi.col(live[i]);
-  const Eigen::VectorXd ll = logLikelihood(residual.residuals(batch));
-  for (std::size_t i = 0; i < live.size(); ++i) out[live[i]] += ll[i];
-  for (Eigen::Index j = 0; j < out.size(); ++j) {
-    if (!std::isfinite(out[j])) out[j] = -kInf;
-  }
-  return out;
 }
 
 // Splits every chain in two halves (rows: chains, columns: iterations).
@@ -194,6 +183,25 @@ void summarise(McmcReference& out) {
 
 }  // namespace
 
+// Log posterior per column; columns outside the prior's support are not simulated.
+Eigen::VectorXd logPosterior(const PosteriorResidual& residual, const PriorDensity& prior,
+                             const Eigen::MatrixXd& xi) {
+  Eigen::VectorXd out = prior.logDensities(xi);
+  std::vector<Eigen::Index> live;
+  for (Eigen::Index j = 0; j < xi.cols(); ++j) {
+    if (std::isfinite(out[j])) live.push_back(j);
+  }
+  if (live.empty()) return out;
+  Eigen::MatrixXd batch(xi.rows(), static_cast<Eigen::Index>(live.size()));
+  for (std::size_t i = 0; i < live.size(); ++i) batch.col(i) = xi.col(live[i]);
+  const Eigen::VectorXd ll = logLikelihood(residual.residuals(batch));
+  for (std::size_t i = 0; i < live.size(); ++i) out[live[i]] += ll[i];
+  for (Eigen::Index j = 0; j < out.size(); ++j) {
+    if (!std::isfinite(out[j])) out[j] = -kInf;
+  }
+  return out;
+}
+
 // The ridge helps where the data pin a parameter far tighter than the others.
 Eigen::MatrixXd choleskyFactor(Eigen::MatrixXd cov) {
   cov = 0.5 * (cov + cov.transpose());
@@ -292,6 +300,29 @@ McmcReference runMcmcReference(const PosteriorResidual& residual,
   out.laplace_xi_stddev = laplace.diagonal().cwiseMax(0.0).cwiseSqrt();
   out.laplace_xi_covariance = laplace;
   Eigen::MatrixXd proposal_factor = choleskyFactor(laplace);
+
+  if (settings.sampler == McmcSampler::kConditionalLaplace) {
+    std::mt19937_64 rng(settings.seed);
+    ImportanceRun run = runConditionalLaplace(residual, prior, *best, settings, rng, progress);
+    out.draws = std::move(run.draws);
+    out.xi_mean = run.mean;
+    out.xi_covariance = run.covariance;
+    out.xi_stddev = run.covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+    out.r_hat = run.r_hat;
+    out.effective_size = run.effective_size;
+    for (int i = 0; i < n; ++i) out.names.push_back("xi" + std::to_string(i + 1));
+    out.mean = out.xi_mean;
+    out.stddev = out.xi_stddev;
+    out.mean_error = (out.stddev.array() / out.effective_size.array().sqrt()).matrix();
+    out.acceptance = run.efficiency;
+    out.importance_ess = run.kish;
+    out.largest_weight = run.largest_weight;
+    out.ridge_nodes = run.nodes;
+    out.simulations = residual.simulations() - simulations_before;
+    out.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_time).count();
+    return out;
+  }
 
   // (2) Over-dispersed starts with finite density.
   Random random(settings.seed);

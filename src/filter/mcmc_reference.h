@@ -17,7 +17,9 @@
 // affine-invariant ensemble (Goodman & Weare 2010 stretch move; `chains` are
 // its walkers), as fast on a narrow straight ridge as on a round target; or
 // kHamiltonian, HMC with finite-difference gradients, whose trajectories
-// follow a curved ridge. The default stays the adaptive Metropolis, so
+// follow a curved ridge; or kConditionalLaplace, not a chain: independent
+// draws from Laplace approximations conditional on a grid along the ridge,
+// weighted to the exact posterior. The default stays the adaptive Metropolis, so
 // existing callers' draws do not change. On vehicle_live.yaml's n = 15 ridge
 // with 1 % noise none of the three converges within 10 minutes
 // (docs/real_vehicle_reference.md §5).
@@ -39,18 +41,27 @@ enum class McmcSampler {
   kAdaptiveMetropolis,  // random-walk chains, covariance adapted during burn-in
   kEnsemble,            // stretch-move walkers; needs chains even and >= 2 n
   kHamiltonian,         // HMC chains, (n + 1) x leapfrog steps simulations per iteration
+  kConditionalLaplace,  // importance sampling along the ridge; `chains` are batches
 };
 
 struct McmcSettings {
   McmcSampler sampler = McmcSampler::kAdaptiveMetropolis;
-  int chains = 8;       // Metropolis chains, or ensemble walkers
-  int burn_in = 2000;   // iterations per chain, adaptation only, discarded
-  int samples = 10000;  // kept iterations per chain
-  int thin = 1;         // store every thin-th kept iteration (draws' memory)
-  int adapt_every = 50; // Metropolis and Hamiltonian: burn-in adaptation period
-  double stretch = 2.0; // ensemble only: the stretch move's a (z in [1/a, a])
-  double start_spread = 2.0;  // chains start at mode + spread * N(0, H^-1)
+  int chains = 8;                    // Metropolis chains, or ensemble walkers
+  int burn_in = 2000;                // iterations per chain, adaptation only, discarded
+  int samples = 10000;               // kept iterations per chain
+  int thin = 1;                      // store every thin-th kept iteration (draws' memory)
+  int adapt_every = 50;              // Metropolis and Hamiltonian: burn-in adaptation period
+  double stretch = 2.0;              // ensemble only: the stretch move's a (z in [1/a, a])
+  double start_spread = 2.0;         // chains start at mode + spread * N(0, H^-1)
   double target_acceptance = 0.234;  // Metropolis only (Hamiltonian: 0.8)
+  // kConditionalLaplace only (mcmc_samplers.h): the ridge's dimension k (the
+  // Laplace covariance's k widest directions, at most 3; -1: those whose
+  // variance is at least 1 % of the widest's), its grid's nodes per axis (0:
+  // 41, 21 or 15 for k = 1, 2, 3), and how far (in log density) the grid
+  // reaches below the ridge's top.
+  int ridge_dimensions = -1;
+  int grid_points = 0;
+  double grid_drop = 12.0;
   std::uint64_t seed = 1;
   ModeSearchSettings mode_search;
 };
@@ -60,7 +71,7 @@ struct McmcReference {
   Eigen::VectorXd xi_mean, xi_stddev;
   Eigen::MatrixXd xi_covariance;
   Eigen::VectorXd mode_xi, laplace_xi_stddev;  // step (1)
-  Eigen::MatrixXd laplace_xi_covariance;      // H^-1
+  Eigen::MatrixXd laplace_xi_covariance;       // H^-1
   // Step (1)'s searches that ended at another maximum (not merged into an
   // earlier one) within 50 of the best log density. Random-walk chains do not
   // cross between narrow modes: when this is not 0, the draws describe the
@@ -74,9 +85,14 @@ struct McmcReference {
   Eigen::VectorXd r_hat;           // split R-hat, per parameter (1 = converged)
   Eigen::VectorXd effective_size;  // bulk ESS over all chains, per parameter
   Eigen::VectorXd mean_error;      // Monte Carlo std error of `mean`: stddev / sqrt(ESS)
-  double acceptance = 0.0;         // of the kept iterations
-  double proposal_scale = 0.0;     // final, relative to 2.38 / sqrt(n) (ensemble: a)
-  long simulations = 0;            // forward-model runs of this call
+  double acceptance = 0.0;         // of the kept iterations (importance sampling: its efficiency)
+  // kConditionalLaplace: 1 / sum w^2 of the normalised weights, the largest
+  // weight, and the ridge grid's nodes with mass (0 for the chain samplers).
+  double importance_ess = 0.0;
+  double largest_weight = 0.0;
+  int ridge_nodes = 0;
+  double proposal_scale = 0.0;  // final, relative to 2.38 / sqrt(n) (ensemble: a)
+  long simulations = 0;         // forward-model runs of this call
   double seconds = 0.0;
   // chains x (samples / thin) x n, germ units (kept draws). The ensemble's
   // walkers are its chains for R-hat and ESS (see mcmc_samplers.h).

@@ -7,7 +7,9 @@
 // ratio in reference std units. Not part of bench.sh (minutes of wall time).
 //   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
 //   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file),
-//   PC_EKF_MCMC_SAMPLER (metropolis; ensemble: CHAINS are then the walkers; hamiltonian),
+//   PC_EKF_MCMC_SAMPLER (metropolis; ensemble: CHAINS are then the walkers; hamiltonian;
+//   conditional_laplace: CHAINS are batches of SAMPLES independent draws, BURN_IN unused,
+//   PC_EKF_MCMC_RIDGE (2) ridge dimensions, PC_EKF_MCMC_GRID (21) nodes per ridge axis),
 //   PC_EKF_MCMC_THIN (1), PC_EKF_MCMC_CHAIN_MEANS (set: each chain's level in M)
 #include <algorithm>
 #include <cstdio>
@@ -49,9 +51,14 @@ void BM_McmcReferenceN11(benchmark::State& state) {
     ms.sampler = McmcSampler::kEnsemble;
   } else if (sampler_name == "hamiltonian") {
     ms.sampler = McmcSampler::kHamiltonian;
+  } else if (sampler_name == "conditional_laplace") {
+    ms.sampler = McmcSampler::kConditionalLaplace;
+    ms.ridge_dimensions = static_cast<int>(envInt("PC_EKF_MCMC_RIDGE", ms.ridge_dimensions));
+    ms.grid_points = static_cast<int>(envInt("PC_EKF_MCMC_GRID", ms.grid_points));
   } else if (sampler_name != "metropolis") {
-    throw std::invalid_argument("PC_EKF_MCMC_SAMPLER: metropolis, ensemble or hamiltonian, not " +
-                                sampler_name);
+    throw std::invalid_argument(
+        "PC_EKF_MCMC_SAMPLER: metropolis, ensemble, hamiltonian or conditional_laplace, not " +
+        sampler_name);
   }
   // Mode search from the prior mean and both filters' estimates.
   std::vector<Eigen::VectorXd> starts{Eigen::VectorXd::Zero(mapping.count())};
@@ -73,6 +80,10 @@ void BM_McmcReferenceN11(benchmark::State& state) {
       sampler_name.c_str(), ms.chains, ms.burn_in, ms.samples, ms.thin, ref.acceptance, ref.proposal_scale, ref.simulations,
       ref.seconds, ref.competing_modes, one_step.wall_seconds, one_step.healthy,
       es_mda.wall_seconds, es_mda.healthy);
+  if (ms.sampler == McmcSampler::kConditionalLaplace) {
+    std::printf("importance sampling: %d ridge nodes, Kish ESS %.0f of %d draws, largest weight %.2e\n",
+                ref.ridge_nodes, ref.importance_ess, ms.chains * ms.samples, ref.largest_weight);
+  }
   // How far the Laplace covariance H^-1 at the mode is from the draws': the
   // eigenvalues of the draws' covariance whitened by H^-1 (all 1 for a Gaussian).
   {
