@@ -3,6 +3,7 @@
 (docs/real_vehicle_reference.md §5).
 
   /usr/bin/python3 scripts/reference_study.py BIN_DIR [--samples 25000] [--records 1,2,...]
+      [--override YAML]
 
 Each record is test/benchmarks/live_n15.yaml (vehicle_live.yaml's payload, 13
 tolerances and design on the speed bump, N = 100 over 3 s, 1 % noise, no
@@ -12,8 +13,11 @@ bench_mcmc_reference runs one-step and ES-MDA and the conditional-Laplace
 reference (4 batches of --samples draws) on the same likelihood. Prints per
 record the reference's M and d_CG (mean +- std), its largest R-hat, smallest
 ESS and time, and for each filter the std ratio (filter / reference) and the
-mean's offset in reference std, for M and d_CG."""
+mean's offset in reference std, for M and d_CG. --override: YAML merged into
+every record's config (e.g. "filter: {relinearize: {shrink: 0.3}}")."""
 import argparse, os, re, subprocess, sys, tempfile
+
+import yaml
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # Vehicles: the nine values' relative offsets (inside vehicle_live.yaml's tolerances).
@@ -31,14 +35,25 @@ RECORDS = [(223.26, 0.6882, "A", 1), (150.0, 0.62, "A", 2), (280.0, 0.90, "B", 3
            (150.0, 0.62, "B", 4), (280.0, 0.90, "C", 5), (200.0, 0.762, "C", 6)]
 
 
-def record_config(mass, position, vehicle, seed):
+def merge(base, extra):
+    for key, value in extra.items():
+        if isinstance(value, dict) and isinstance(base.get(key), dict):
+            merge(base[key], value)
+        else:
+            base[key] = value
+    return base
+
+
+def record_config(mass, position, vehicle, seed, override=None):
     text = open(os.path.join(ROOT, "test", "benchmarks", "live_n15.yaml")).read()
     start = text.index("truth:")
     truth = "truth:\n  xi: [%.10f, %.10f]\n  seed: %d\n  vehicle:\n" % (
         (mass / 200.0 - 1.0) / 0.5, (position / 0.762 - 1.0) / 0.25, seed)
     for (name, value), off in zip(NOMINAL.items(), VEHICLES[vehicle]):
         truth += "    %s: %.6g\n" % (name, value * (1.0 + off))
-    return text[:start] + truth
+    if not override:
+        return text[:start] + truth
+    return yaml.safe_dump(merge(yaml.safe_load(text[:start] + truth), yaml.safe_load(override)))
 
 
 def run(bin_dir, path, samples):
@@ -59,6 +74,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("bin_dir")
     ap.add_argument("--samples", type=int, default=25000)
+    ap.add_argument("--override", default="")
     ap.add_argument("--records", default=",".join(str(i + 1) for i in range(len(RECORDS))))
     a = ap.parse_args()
     print("%-3s %-24s %-30s %6s %6s %5s | %-23s | %-23s" % (
@@ -69,7 +85,7 @@ def main():
             mass, position, vehicle, seed = RECORDS[i - 1]
             path = os.path.join(tmp, "record_%d.yaml" % i)
             with open(path, "w") as f:
-                f.write(record_config(mass, position, vehicle, seed))
+                f.write(record_config(mass, position, vehicle, seed, a.override))
             rows, seconds = run(a.bin_dir, path, a.samples)
             m, d = rows["added_mass"], rows["added_mass_position"]
             r_hat = max(r[2] for r in rows.values())

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "pc_ekf/filter/prior_correction.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/pc/pc_statistics.h"
 
@@ -57,10 +58,12 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
 
 BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, UpdateRule rule,
-                        const std::vector<double>& alphas, SupportRule support) {
+                        const std::vector<double>& alphas, SupportRule support,
+                        const Eigen::MatrixXd& start) {
   if (alphas.empty()) throw std::invalid_argument("batchUpdate: no iterations");
   BatchResult result;
-  Eigen::MatrixXd theta = propagator.priorState().bottomRows(propagator.parameterCount());
+  Eigen::MatrixXd theta =
+      start.size() > 0 ? start : propagator.priorState().bottomRows(propagator.parameterCount());
   for (std::size_t i = 0; i < alphas.size(); ++i) {
     ForecastReport report;
     const StackedObservations obs = forecastRecord(propagator, theta, series, &report);
@@ -95,6 +98,45 @@ BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries&
   result.mean = pcMean(theta);
   result.stddev = pcStddev(theta);
   result.finite = result.finite && theta.allFinite();
+  return result;
+}
+
+BatchResult batchUpdateRestarted(const PcPropagator& propagator, const MeasurementSeries& series,
+                                 const NoiseModel& noise, UpdateRule rule,
+                                 const std::vector<double>& alphas, SupportRule support,
+                                 const BatchRestarts& restarts) {
+  if (restarts.restarts < 0 || !(restarts.width > 1.0)) {
+    throw std::invalid_argument("batchUpdateRestarted: need restarts >= 0 and width > 1");
+  }
+  BatchResult result = batchUpdate(propagator, series, noise, rule, alphas, support);
+  const Eigen::MatrixXd prior = propagator.priorState().bottomRows(propagator.parameterCount());
+  const Eigen::VectorXd prior_std = pcStddev(prior);
+  for (int k = 0; k < restarts.restarts && result.finite && result.forecast.ok; ++k) {
+    const ParameterMapping& map = propagator.mapping();
+    Eigen::MatrixXd working =
+        map.workingCoefficients(propagator.basis(), result.mean, restarts.width * result.stddev);
+    bool usable = true;
+    for (int i = 0; i < working.rows(); ++i) {
+      if (restarts.width * result.stddev[i] >= prior_std[i]) {
+        working.row(i) = prior.row(i);  // not narrowed: the prior stays
+      } else if (pcStddev(working.row(i))[0] <= 0.0) {
+        usable = false;  // a mean on the support's edge: no working prior
+      }
+    }
+    if (!usable) break;
+    BatchResult next = batchUpdate(propagator, series, noise, rule, alphas, support, working);
+    if (!next.finite || !next.forecast.ok ||
+        !correctForPrior(prior, working, next.coefficients)) {
+      break;  // the last good result stands
+    }
+    next.mean = pcMean(next.coefficients);
+    next.stddev = pcStddev(next.coefficients);
+    next.forecast.merge(result.forecast);
+    next.iterations += result.iterations;
+    next.nis = result.nis;  // the prior predictive's
+    next.damping = std::min(next.damping, result.damping);
+    result = std::move(next);
+  }
   return result;
 }
 

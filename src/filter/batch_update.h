@@ -38,9 +38,29 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
 
 // alphas = {1} is the paper's single whole-set update; ES-MDA uses
 // sum(1/alpha_i) = 1 (default four times 4). R_i = alpha_i R.
+// start: the parameter coefficients to begin from (parameters x S); empty:
+// the propagator's prior.
 BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, UpdateRule rule,
                         const std::vector<double>& alphas,
-                        SupportRule support = SupportRule::kIgnore);
+                        SupportRule support = SupportRule::kIgnore,
+                        const Eigen::MatrixXd& start = Eigen::MatrixXd());
+
+// Re-linearised batch update (docs/method.md §4.5): after the update from the
+// prior, `restarts` times again from a working prior around the last result
+// (std = width x its std, for the parameters that narrowed below their prior
+// std / width; the others keep the prior), each result reported with the
+// working prior's information replaced by the prior's (prior_correction.h).
+// The first update's surrogate spans the prior's whole width, where the
+// readings are far from linear in the parameters; the restarts' surrogates
+// span the posterior's neighbourhood. restarts = 0: batchUpdate.
+struct BatchRestarts {
+  int restarts = 0;
+  double width = 2.0;
+};
+BatchResult batchUpdateRestarted(const PcPropagator& propagator, const MeasurementSeries& series,
+                                 const NoiseModel& noise, UpdateRule rule,
+                                 const std::vector<double>& alphas, SupportRule support,
+                                 const BatchRestarts& restarts);
 
 }  // namespace pc_ekf

@@ -1,4 +1,5 @@
 #include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/prior_correction.h"
 
 #include <cmath>
 #include <condition_variable>
@@ -173,6 +174,7 @@ void OneStepFilter::reset() {
   violations_ = 0;
   health_.reset();
   rates_.reset(0.0);
+  working_theta_.resize(0, 0);
   startRelinearization();
 }
 
@@ -186,10 +188,23 @@ void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) 
   violations_ = 0;
   health_.reset();
   if (rates_.samples() == 0) rates_.reset(time);  // a fresh filter: the run starts here
+  working_theta_.resize(0, 0);  // not in a checkpoint: reported as the state says
   endRelinearization();
 }
 
 StepResult OneStepFilter::process(const Measurement& m) {
+  StepResult r = processSample(m);
+  if (r.reopened) working_theta_.resize(0, 0);  // re-opened towards the prior
+  if (settings_.relinearize.prior_correction && working_theta_.size() > 0 && r.forecast.ok &&
+      correctForPrior(propagator_->priorState().bottomRows(propagator_->parameterCount()),
+                      working_theta_, r.coefficients)) {
+    r.mean = pcMean(r.coefficients);
+    r.stddev = pcStddev(r.coefficients);
+  }
+  return r;
+}
+
+StepResult OneStepFilter::processSample(const Measurement& m) {
   const MechanicalModel& model = propagator_->model();
   const std::string problem = measurementProblem(m, static_cast<int>(model.channelNames().size()));
   if (!problem.empty()) throw std::invalid_argument("measurement rejected: " + problem);
@@ -288,6 +303,7 @@ StepResult OneStepFilter::swapInRerun(const StepResult& live) {
   ++restarts_;
   start_theta_ = rerun_theta_;
   start_stddev_ = pcStddev(rerun_theta_);
+  working_theta_ = rerun_theta_;
   if (restarts_ >= settings_.relinearize.max_restarts || reopened) endRelinearization();
   last.relinearized = true;
   last.restarts = restarts_;
@@ -316,6 +332,7 @@ StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi&
   restarts_ = restarts;
   start_theta_ = theta;
   start_stddev_ = pcStddev(theta);
+  working_theta_ = theta;
   if (restarts_ >= rl.max_restarts || reopened) endRelinearization();
   last.relinearized = true;
   last.restarts = restarts_;

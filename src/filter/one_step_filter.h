@@ -124,6 +124,10 @@ class OneStepFilter {
   std::vector<Measurement> kept_;   // since the (working) prior
   Eigen::MatrixXd start_theta_;     // parameter coefficients at that start
   Eigen::VectorXd start_stddev_;
+  // The prior the state's parameters were updated from, when it is a working
+  // prior (relinearize.prior_correction); empty when it is the prior itself.
+  Eigen::MatrixXd working_theta_;
+  StepResult processSample(const Measurement& m);
   int restarts_ = 0;
   std::unique_ptr<DeferredRerun> rerun_;  // a deferred re-run under way
   Eigen::MatrixXd rerun_theta_;           // its working prior's parameter coefficients

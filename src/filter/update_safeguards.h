@@ -45,6 +45,13 @@ struct RelinearizeSettings {
   // thread while the filter goes on, and its state replaces the filter's after
   // sample k + ceil(defer x k). 0 = re-run within sample k.
   double defer = 0.0;
+  // The working prior is centred by the data, and it stands in for the prior
+  // in the directions it narrows. true: what the filter reports has the
+  // working prior's information replaced by the prior's (information form,
+  // Gaussian in the parameters; prior_correction.h), so the working prior may
+  // be narrow (a local linearisation) without counting the data twice and
+  // without losing what only the prior says (a ridge the readings leave open).
+  bool prior_correction = false;
 };
 
 // Largest gamma in [0, 1] such that before + gamma (after - before) keeps every

@@ -104,6 +104,8 @@ const std::vector<ConfigKey>& configSchema() {
       // the filters
       {"filter.update", "choice", "square_root", "square_root or paper", "the PC Kalman update ([method.md §4.2-4.3](method.md))"},
       {"filter.es_mda.alphas", "numbers", "[4, 4, 4, 4]", "1 to 100 positive numbers with sum(1/alpha) = 1", "ES-MDA: the inflation of each pass ([method.md §4.5](method.md))"},
+      {"filter.es_mda.restarts", "integer", "0", "[0, 100]", "ES-MDA and the whole-set update: re-runs from a working prior around the last result (std = `width` x its std), each reported with the working prior's information replaced by the prior's ([method.md §4.5](method.md)); 0 = one run from the prior"},
+      {"filter.es_mda.width", "number", "2", "(1, inf)", "the restarts' working prior std, as a multiple of the last result's std"},
       {"filter.enkf.members", "integer", "200", "[2, 10000000]", "EnKF ensemble size"},
       {"filter.enkf.seed", "unsigned", "7", "[0, 2^64)", "EnKF seed"},
       {"filter.enkf.update", "choice", "perturbed", "perturbed or square_root", "perturbed observations (baseline) or square_root (EAKF, diagnosis)"},
@@ -122,6 +124,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"filter.relinearize.max_restarts", "integer", "4", "[1, 100]", "re-linearisations at most"},
       {"filter.relinearize.max_samples", "integer", "5000", "[1, 100000000]", "samples kept for a re-run; more end re-linearisation"},
       {"filter.relinearize.defer", "number", "0", "[0, 1000]", "a re-run due after sample k runs on a worker thread while the filter goes on; its state replaces the filter's after sample k + ceil(defer k); 0 = within sample k ([realtime.md](realtime.md))"},
+      {"filter.relinearize.prior_correction", "bool", "false", "true or false", "one-step: after a re-linearisation, report the posterior with the working prior's information replaced by the prior's (Gaussian in the parameters), so that a narrow working prior neither counts the data twice nor loses what only the prior bounds ([method.md §4.9](method.md))"},
       // health
       {"health.nis_window", "integer", "10", "[1, 1000000]", "samples in the windowed NIS mean ([method.md §5](method.md))"},
       {"health.nis_confidence", "number", "0.99", "(0, 1]", "two-sided confidence of every chi-square bound"},

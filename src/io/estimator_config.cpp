@@ -230,6 +230,7 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   l.integer("max_restarts", rl.max_restarts, 1, 100);
   l.integer("max_samples", rl.max_samples, 1, 100000000);
   l.number("defer", rl.defer, 0.0, 1000.0);
+  rl.prior_correction = readFlag(l, "prior_correction", rl.prior_correction);
   if (!(rl.shrink * rl.width < 1.0)) {
     l.fail("width", std::to_string(rl.width),
            "shrink x width < 1 (each restart must narrow the working prior)");
@@ -256,6 +257,8 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   if (std::abs(inv - 1.0) > 1e-9) {
     e.fail("alphas", "with sum(1/alpha) = " + std::to_string(inv), "sum(1/alpha) = 1");
   }
+  e.integer("restarts", c.es_mda.restarts, 0, 100);
+  e.number("width", c.es_mda.width, 1.0, kInf, true);
   e.finish();
   YamlMapReader k = f.map("enkf");
   k.integer("members", c.enkf.members, 2, 10000000);

@@ -118,6 +118,8 @@ struct CollocationConfig {
 
 struct EsMdaConfig {
   std::vector<double> alphas{4.0, 4.0, 4.0, 4.0};  // sum of 1/alpha must be 1
+  int restarts = 0;    // re-runs from a working prior (batch_update.h)
+  double width = 2.0;  // the working prior's std, x the last result's
 };
 
 struct EnkfConfig {

@@ -267,8 +267,8 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
 BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
                               const MeasurementSeries& series, const std::vector<double>& alphas) {
   BatchOutcome o;
-  o.result =
-      batchUpdate(propagator, series, makeNoiseModel(c), c.update, alphas, c.safeguards.support);
+  o.result = batchUpdateRestarted(propagator, series, makeNoiseModel(c), c.update, alphas,
+                                  c.safeguards.support, {c.es_mda.restarts, c.es_mda.width});
   const BatchResult& b = o.result;
   o.healthy = b.finite && b.forecast.ok;
   if (!b.forecast.first_problem.empty()) o.warnings.push_back(b.forecast.first_problem);

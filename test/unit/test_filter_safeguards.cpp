@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/prior_correction.h"
 #include "pc_ekf/filter/update_safeguards.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/estimator_config.h"
@@ -169,6 +170,45 @@ TEST(Relinearize, WorkingPriorHasTheAskedMomentsInsideThePriorSupport) {
   EXPECT_NEAR(pcStddev(w)[1], 0.01, 1e-12);
 }
 
+// Gaussian and linear: data of information D (3 parameters) give, from a
+// working prior q (mean q, covariance Q), the posterior P_q = (Q^-1 + D)^-1,
+// m_q = P_q (Q^-1 q + D y); from the prior (m0, P0), P = (P0^-1 + D)^-1,
+// m = P (P0^-1 m0 + D y). The correction turns the first into the second,
+// also when D leaves a direction unread (a ridge only the prior bounds).
+TEST(PriorCorrection, SwapsTheWorkingPriorForThePriorInClosedForm) {
+  Eigen::Matrix3d d;  // rank 2: (1, 1, 0) / sqrt(2) is unread
+  const Eigen::Vector3d u(1.0, -1.0, 0.0), w(0.0, 0.0, 1.0);
+  d = 40.0 * u * u.transpose() + 9.0 * w * w.transpose();
+  const Eigen::Vector3d y(0.3, -0.2, 0.5);
+  // Coefficient matrices (3 x 4, orthonormal terms): constant, then a square root.
+  const auto coefficients = [](const Eigen::Vector3d& mean, const Eigen::Matrix3d& cov) {
+    Eigen::MatrixXd c(3, 4);
+    c.col(0) = mean;
+    c.rightCols(3) = cov.llt().matrixL();
+    return c;
+  };
+  const Eigen::Vector3d m0(0.0, 0.1, -0.1), q(0.25, -0.15, 0.45);
+  Eigen::Matrix3d p0 = Eigen::Vector3d(4.0, 1.0, 2.0).asDiagonal();
+  p0(0, 1) = p0(1, 0) = 0.5;
+  const Eigen::Matrix3d qc = Eigen::Vector3d(0.09, 0.04, 0.01).asDiagonal();
+  const Eigen::Matrix3d pq = (qc.inverse() + d).inverse();
+  const Eigen::Vector3d mq = pq * (qc.inverse() * q + d * y);
+  const Eigen::Matrix3d p = (p0.inverse() + d).inverse();
+  const Eigen::Vector3d m = p * (p0.inverse() * m0 + d * y);
+  Eigen::MatrixXd posterior = coefficients(mq, pq);
+  ASSERT_TRUE(correctForPrior(coefficients(m0, p0), coefficients(q, qc), posterior));
+  EXPECT_LT((posterior.col(0) - m).norm(), 1e-9);
+  const Eigen::MatrixXd rest = posterior.rightCols(3);
+  EXPECT_LT((rest * rest.transpose() - p).norm(), 1e-9);
+  // Along the unread direction the prior alone speaks: far wider than q's.
+  const Eigen::Vector3d v = Eigen::Vector3d(1.0, 1.0, 0.0).normalized();
+  EXPECT_GT(v.dot(p * v), 10.0 * v.dot(pq * v));
+  // The working prior equal to the prior: nothing changes.
+  Eigen::MatrixXd same = coefficients(mq, pq);
+  ASSERT_TRUE(correctForPrior(coefficients(q, qc), coefficients(q, qc), same));
+  EXPECT_LT((same - coefficients(mq, pq)).norm(), 1e-9);
+}
+
 const std::string kUncertain =
     "uncertain:\n"
     "  - {name: added_mass, nominal: 200.0, relative_range: 0.5, germ: {family: beta, alpha: 2, beta: 2}}\n"
@@ -178,7 +218,9 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   const EstimatorConfig c = parseConfigString(kUncertain +
       "measurement: {r_rule: sensor, sensor_std: [1e-3, 1e-3, 1e-2, 1e-2]}\n"
       "filter: {support: ignore, drift: [2.0, 0.0], reopen: {mode: prior, after: 7},\n"
-      "         relinearize: {shrink: 0.01, width: 20, max_restarts: 5, max_samples: 300}}\n"
+      "         relinearize: {shrink: 0.01, width: 20, max_restarts: 5, max_samples: 300,\n"
+      "                       prior_correction: true},\n"
+      "         es_mda: {alphas: [2, 2], restarts: 3, width: 1.5}}\n"
       "health: {innovation_gate: 1e-6, predictive_check: false}\n",
       "t.yaml");
   EXPECT_EQ(c.measurement.r_rule, NoiseRule::kSensor);
@@ -194,6 +236,9 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_DOUBLE_EQ(c.safeguards.relinearize.width, 20.0);
   EXPECT_EQ(c.safeguards.relinearize.max_restarts, 5);
   EXPECT_EQ(c.safeguards.relinearize.max_samples, 300);
+  EXPECT_TRUE(c.safeguards.relinearize.prior_correction);
+  EXPECT_EQ(c.es_mda.restarts, 3);
+  EXPECT_DOUBLE_EQ(c.es_mda.width, 1.5);
   EXPECT_DOUBLE_EQ(c.health.innovation_gate, 1e-6);
   EXPECT_FALSE(c.health.predictive_check);
   // Defaults: the paper's rule, damping on, no drift, no re-opening, gate off.
@@ -203,6 +248,8 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_TRUE(d.safeguards.drift.empty());
   EXPECT_EQ(d.safeguards.reopen.mode, ReopenMode::kOff);
   EXPECT_EQ(d.safeguards.relinearize.shrink, 0.0);
+  EXPECT_FALSE(d.safeguards.relinearize.prior_correction);
+  EXPECT_EQ(d.es_mda.restarts, 0);
   EXPECT_EQ(d.health.innovation_gate, 0.0);
   const std::pair<const char*, const char*> bad[] = {
       {"measurement: {r_rule: sensor}", "measurement.sensor_std"},
@@ -214,6 +261,9 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
       {"filter: {relinearize: {shrink: 1.5}}", "filter.relinearize.shrink"},
       {"filter: {relinearize: {shrink: 0.1, width: 20}}", "filter.relinearize.width"},
       {"filter: {relinearize: {shrinks: 0.1}}", "filter.relinearize.shrinks"},
+      {"filter: {relinearize: {prior_correction: yes please}}", "filter.relinearize.prior_correction"},
+      {"filter: {es_mda: {restarts: -1}}", "filter.es_mda.restarts"},
+      {"filter: {es_mda: {width: 1.0}}", "filter.es_mda.width"},
       {"health: {innovation_gate: 0.9}", "health.innovation_gate"},
   };
   for (const auto& [yaml, key] : bad) {
