@@ -114,16 +114,17 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
   for (int k = 0; k < restarts.restarts && result.finite && result.forecast.ok; ++k) {
     const ParameterMapping& map = propagator.mapping();
     Eigen::MatrixXd working =
-        map.workingCoefficients(propagator.basis(), result.mean, restarts.width * result.stddev);
-    bool usable = true;
+        map.workingCoefficients(propagator.basis(), result.mean, restarts.width * result.stddev,
+                                true);
     for (int i = 0; i < working.rows(); ++i) {
-      if (restarts.width * result.stddev[i] >= prior_std[i]) {
-        working.row(i) = prior.row(i);  // not narrowed: the prior stays
-      } else if (pcStddev(working.row(i))[0] <= 0.0) {
-        usable = false;  // a mean on the support's edge: no working prior
+      // Not narrowed, or cut short by a support narrower than the working prior
+      // (P_q^-1 - Q^-1 would be a difference of nearly equal numbers): the
+      // prior stays. Near the support's end the working prior moves inwards.
+      const double asked = restarts.width * result.stddev[i];
+      if (asked >= prior_std[i] || pcStddev(working.row(i))[0] < 0.75 * asked) {
+        working.row(i) = prior.row(i);
       }
     }
-    if (!usable) break;
     BatchResult next = batchUpdate(propagator, series, noise, rule, alphas, support, working);
     if (!next.finite || !next.forecast.ok ||
         !correctForPrior(prior, working, next.coefficients)) {
@@ -134,7 +135,9 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
     next.forecast.merge(result.forecast);
     next.iterations += result.iterations;
     next.nis = result.nis;  // the prior predictive's
-    next.damping = std::min(next.damping, result.damping);
+    // next.damping: the last run's. The first run's linearisation spans the
+    // prior, where a step towards the support's end need not be a model
+    // error; a restart that still meets the end is.
     result = std::move(next);
   }
   return result;

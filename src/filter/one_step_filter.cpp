@@ -252,9 +252,14 @@ bool OneStepFilter::workingPrior(const StepResult& r, const Eigen::ArrayXi& narr
   // The parameters that have narrowed start again around their estimate; the
   // others keep the distribution they started from (the prior, at first).
   *theta = propagator_->mapping().workingCoefficients(propagator_->basis(), r.mean,
-                                                      rl.width * r.stddev);
+                                                      rl.width * r.stddev, rl.prior_correction);
   for (int i = 0; i < theta->rows(); ++i) {
-    if (!narrowed[i]) {
+    // With the prior put back, a working prior cut short (a support narrower
+    // than it) would make P_q^-1 - Q^-1 a difference of nearly equal numbers:
+    // such a parameter keeps the distribution it started from.
+    const bool cut = rl.prior_correction &&
+                     pcStddev(theta->row(i))[0] < 0.75 * rl.width * r.stddev[i];
+    if (!narrowed[i] || cut) {
       theta->row(i) = start_theta_.row(i);
     } else if (pcStddev(theta->row(i))[0] <= 0.0) {
       endRelinearization();  // a mean on the support's edge: no working prior

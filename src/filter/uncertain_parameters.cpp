@@ -78,7 +78,8 @@ Eigen::MatrixXd ParameterMapping::priorCoefficients(const PolynomialBasis& basis
 
 Eigen::MatrixXd ParameterMapping::workingCoefficients(const PolynomialBasis& basis,
                                                       const Eigen::VectorXd& mean,
-                                                      const Eigen::VectorXd& stddev) const {
+                                                      const Eigen::VectorXd& stddev,
+                                                      bool recentre) const {
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(count(), basis.size());
   const auto& idx = basis.multiIndices();
   for (int i = 0; i < count(); ++i) {
@@ -86,13 +87,19 @@ Eigen::MatrixXd ParameterMapping::workingCoefficients(const PolynomialBasis& bas
     // value = mean + s psi_{e_i}, psi_{e_i} = (xi - a_0) / sqrt(b_1) on [lo, hi].
     const double a0 = f.recurrenceA(0), sd = std::sqrt(f.recurrenceB(1));
     const double lo = (f.lower() - a0) / sd, hi = (f.upper() - a0) / sd;
-    const double room_below = mean[i] - lowerBound(i), room_above = upperBound(i) - mean[i];
-    if (!(room_below > 0.0 && room_above > 0.0)) continue;  // row left zero
-    double s = stddev[i];
+    double m = mean[i], s = stddev[i];
     constexpr double kInside = 0.999;  // the support's ends stay strictly inside
+    if (recentre) {
+      const double room = upperBound(i) - lowerBound(i);
+      if (std::isfinite(lo) && std::isfinite(hi)) s = std::min(s, kInside * room / (hi - lo));
+      if (std::isfinite(lo)) m = std::max(m, lowerBound(i) - s * lo / kInside);
+      if (std::isfinite(hi)) m = std::min(m, upperBound(i) - s * hi / kInside);
+    }
+    const double room_below = m - lowerBound(i), room_above = upperBound(i) - m;
+    if (!(room_below > 0.0 && room_above > 0.0)) continue;  // row left zero
     if (std::isfinite(lo)) s = std::min(s, kInside * room_below / -lo);
     if (std::isfinite(hi)) s = std::min(s, kInside * room_above / hi);
-    c(i, 0) = mean[i];
+    c(i, 0) = m;
     for (int j = 1; j < basis.size() && basis.order() >= 1; ++j) {
       int degree = 0;
       for (int e : idx[j]) degree += e;

@@ -43,8 +43,11 @@ class ParameterMapping {
   // the given means and standard deviations (a working prior for
   // re-linearisation, docs/method.md §4.9). A std is shrunk where its support
   // would leave the prior's; a row is zero when its mean is not strictly inside.
+  // recentre: instead, the mean moves inwards until the asked std fits (the
+  // std shrinks only where the prior's support is narrower than the working
+  // one): with the prior put back, the working prior's centre is free.
   Eigen::MatrixXd workingCoefficients(const PolynomialBasis& basis, const Eigen::VectorXd& mean,
-                                      const Eigen::VectorXd& stddev) const;
+                                      const Eigen::VectorXd& stddev, bool recentre = false) const;
   // Support of each parameter under its prior germ (may be infinite).
   double lowerBound(int i) const;
   double upperBound(int i) const;
