@@ -178,9 +178,14 @@ void OneStepFilter::reset() {
   startRelinearization();
 }
 
-void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) {
+void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples,
+                            const Eigen::MatrixXd& working) {
   if (x.rows() != x_.rows() || x.cols() != x_.cols()) {
     throw std::invalid_argument("restore: state size does not match the filter");
+  }
+  if (working.size() > 0 &&
+      (working.rows() != propagator_->parameterCount() || working.cols() != x_.cols())) {
+    throw std::invalid_argument("restore: working prior size does not match the filter");
   }
   x_ = x;
   t_ = time;
@@ -188,20 +193,25 @@ void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples) 
   violations_ = 0;
   health_.reset();
   if (rates_.samples() == 0) rates_.reset(time);  // a fresh filter: the run starts here
-  working_theta_.resize(0, 0);  // not in a checkpoint: reported as the state says
+  working_theta_ = working;
   endRelinearization();
 }
 
 StepResult OneStepFilter::process(const Measurement& m) {
   StepResult r = processSample(m);
   if (r.reopened) working_theta_.resize(0, 0);  // re-opened towards the prior
-  if (settings_.relinearize.prior_correction && working_theta_.size() > 0 && r.forecast.ok &&
+  report(r);
+  return r;
+}
+
+void OneStepFilter::report(StepResult& r) const {
+  if (settings_.relinearize.prior_correction && working_theta_.size() > 0 &&
+      r.coefficients.allFinite() &&
       correctForPrior(propagator_->priorState().bottomRows(propagator_->parameterCount()),
                       working_theta_, r.coefficients)) {
     r.mean = pcMean(r.coefficients);
     r.stddev = pcStddev(r.coefficients);
   }
-  return r;
 }
 
 StepResult OneStepFilter::processSample(const Measurement& m) {

@@ -76,7 +76,17 @@ class OneStepFilter {
   const OneStepSettings& settings() const { return settings_; }
   // Restores a state (same propagator and settings); the rejected count is
   // kept, re-linearisation ends (the kept samples no longer lead to x).
-  void restore(const Eigen::MatrixXd& x, double time, int samples);
+  // working: the working prior x was updated from (workingPrior()); empty:
+  // the prior. Throws std::invalid_argument for a wrong size.
+  void restore(const Eigen::MatrixXd& x, double time, int samples,
+               const Eigen::MatrixXd& working = Eigen::MatrixXd());
+  // The working prior's parameter coefficients the state was updated from,
+  // when relinearize.prior_correction is on and a restart came; else empty.
+  const Eigen::MatrixXd& workingPrior() const { return working_theta_; }
+  // r's parameters with the working prior's information replaced by the
+  // prior's (relinearize.prior_correction; prior_correction.h); process()
+  // applies it to every result, a caller reporting state() itself calls it.
+  void report(StepResult& r) const;
   int rejected() const { return rejected_; }
   // Earliest time the filter may still need the road from (a re-run).
   double roadNeededFrom() const { return relinearizing_ ? 0.0 : t_; }

@@ -1,5 +1,7 @@
 #include "pc_ekf/io/checkpoint.h"
 
+#include <algorithm>
+
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -45,6 +47,7 @@ void writeFilter(std::ostream& out, const std::string& name, const FilterCheckpo
   out << name << ".time = " << number(f.time) << "\n";
   out << name << ".samples = " << f.samples << "\n";
   out << name << ".x = " << matrixText(f.x) << "\n";
+  out << name << ".working = " << (f.working.size() > 0 ? matrixText(f.working) : "none") << "\n";
 }
 
 // ---- reading ----
@@ -65,8 +68,8 @@ class CheckpointText : public KeyValueText {
     return {static_cast<std::uint32_t>(whole(key, t[0], 0xffffffffu)),
             static_cast<std::uint32_t>(whole(key, t[1], 999999999u))};
   }
-  Eigen::MatrixXd matrix(const std::string& key) {
-    const auto t = tokens(key);
+  Eigen::MatrixXd matrix(const std::string& key) { return matrix(key, tokens(key)); }
+  Eigen::MatrixXd matrix(const std::string& key, const std::vector<std::string>& t) {
     if (t.size() < 2) fail(key, "expected 'rows cols' and the values, row-major");
     const auto rows = static_cast<Eigen::Index>(whole(key, t[0], 100000));
     const auto cols = static_cast<Eigen::Index>(whole(key, t[1], 100000));
@@ -98,6 +101,12 @@ class CheckpointText : public KeyValueText {
     f.time = real(name + ".time");
     f.samples = integer(name + ".samples");
     f.x = matrix(name + ".x");
+    const std::string working = name + ".working";
+    const auto keys = remainingKeys();
+    if (std::binary_search(keys.begin(), keys.end(), working)) {
+      const auto t = tokens(working);
+      if (!(t.size() == 1 && t[0] == "none")) f.working = matrix(working, t);
+    }
     return f;
   }
 

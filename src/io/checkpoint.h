@@ -38,6 +38,10 @@ struct FilterCheckpoint {
   Eigen::MatrixXd x;  // (states + parameters) x S
   double time = 0.0;
   int samples = 0;
+  // The working prior x was updated from (OneStepFilter::workingPrior,
+  // parameters x S); empty: the prior. Written as `none` then; a checkpoint
+  // without the key reads as empty.
+  Eigen::MatrixXd working;
 };
 
 struct Checkpoint {

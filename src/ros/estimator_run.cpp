@@ -22,6 +22,7 @@ bool finiteResult(const StepResult& r) {
 StepResult fallbackResult(const StepResult& bad, const OneStepFilter& filter) {
   StepResult r = bad;
   r.coefficients = filter.state().bottomRows(filter.propagator().parameterCount());
+  filter.report(r);
   r.mean = pcMean(r.coefficients);
   r.stddev = pcStddev(r.coefficients);
   r.health.non_finite = true;
@@ -80,13 +81,14 @@ ParameterEstimate EstimatorRun::message(const StepResult& r, const ros::Time& st
 SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stamp) {
   SampleEstimate out;
   const Eigen::MatrixXd before = full_.state();
+  const Eigen::MatrixXd working_before = full_.workingPrior();
   const double time_before = full_.time();
   StepResult r = full_.process(m);
   pending_swap_ = r.rerun_pending ? r.rerun_swap_after : 0;
   const bool singular = r.update.singular;
   if (!finiteResult(r)) {
     // Keep the filter usable: the sample is skipped, its index still counted.
-    full_.restore(before, time_before, r.index);
+    full_.restore(before, time_before, r.index, working_before);
     r = fallbackResult(r, full_);
     out.non_finite = true;
   }
@@ -95,12 +97,13 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   const int k = config_.health.coherence_decimation;
   if (config_.node.coherence_check && r.index % k == 0) {
     const Eigen::MatrixXd coarse_before = decimated_.state();
+    const Eigen::MatrixXd coarse_working = decimated_.workingPrior();
     const double coarse_time = decimated_.time();
     const StepResult d = decimated_.process(m);
     if (finiteResult(d) && !out.non_finite) {
       disagreement_ = coherenceDisagreement(r.mean, r.stddev, d.mean, d.stddev);
     } else if (!finiteResult(d)) {
-      decimated_.restore(coarse_before, coarse_time, d.index);
+      decimated_.restore(coarse_before, coarse_time, d.index, coarse_working);
       out.coherence_non_finite = true;
     }
   }
@@ -134,8 +137,9 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
 
 void EstimatorRun::saveTo(CheckpointSnapshot& s) const {
   Checkpoint& c = s.checkpoint;
-  c.full = {full_.state(), full_.time(), full_.samples()};
-  c.decimated = {decimated_.state(), decimated_.time(), decimated_.samples()};
+  c.full = {full_.state(), full_.time(), full_.samples(), full_.workingPrior()};
+  c.decimated = {decimated_.state(), decimated_.time(), decimated_.samples(),
+                 decimated_.workingPrior()};
   c.coherence_disagreement = disagreement_;
   s.batch = batch_series_;
   c.batch_last_stamp = {batch_last_stamp_.sec, batch_last_stamp_.nsec};
@@ -151,6 +155,18 @@ void EstimatorRun::resumeFrom(const Checkpoint& c, const std::string& path) {
                             std::to_string(x.cols()));
     }
   };
+  const auto working_fits = [&](const FilterCheckpoint& f, const char* name) {
+    if (f.working.size() > 0 && (f.working.rows() != propagator_->parameterCount() ||
+                                 f.working.cols() != full_.state().cols())) {
+      throw CheckpointError("checkpoint " + path + ": " + name + ".working is " +
+                            std::to_string(f.working.rows()) + " x " +
+                            std::to_string(f.working.cols()) + ", this configuration's is " +
+                            std::to_string(propagator_->parameterCount()) + " x " +
+                            std::to_string(full_.state().cols()));
+    }
+  };
+  working_fits(c.full, "full");
+  working_fits(c.decimated, "decimated");
   fits(c.full, "full");
   fits(c.decimated, "decimated");
   const int parameters = propagator_->parameterCount();
@@ -168,8 +184,8 @@ void EstimatorRun::resumeFrom(const Checkpoint& c, const std::string& path) {
                             "': " + problem);
     }
   }
-  full_.restore(c.full.x, c.full.time, c.full.samples);
-  decimated_.restore(c.decimated.x, c.decimated.time, c.decimated.samples);
+  full_.restore(c.full.x, c.full.time, c.full.samples, c.full.working);
+  decimated_.restore(c.decimated.x, c.decimated.time, c.decimated.samples, c.decimated.working);
   disagreement_ = c.coherence_disagreement;
   batch_series_ = KeptSamples(c.batch_samples);
   batch_last_stamp_ = ros::Time(c.batch_last_stamp.sec, c.batch_last_stamp.nsec);

@@ -53,6 +53,7 @@ Checkpoint sampleCheckpoint() {
   c.full.time = 1.08;
   c.full.samples = 36;
   c.decimated.x = c.full.x * 0.1;
+  c.full.working = c.full.x.bottomRows(2) / 7.0;  // a working prior; decimated: none
   c.decimated.time = 0.9;
   c.decimated.samples = 3;
   c.coherence_disagreement = Eigen::Vector2d(0.1, 2.0 / 3.0);
@@ -104,6 +105,12 @@ TEST(Checkpoint, RoundTripIsBitExact) {
   EXPECT_TRUE(sameBits(r.full.time, 1.08));
   EXPECT_EQ(r.full.samples, 36);
   EXPECT_EQ(r.decimated.samples, 3);
+  ASSERT_EQ(r.full.working.rows(), 2);
+  ASSERT_EQ(r.full.working.cols(), 4);
+  for (Eigen::Index i = 0; i < c.full.working.size(); ++i) {
+    EXPECT_TRUE(sameBits(r.full.working(i), c.full.working(i))) << i;
+  }
+  EXPECT_EQ(r.decimated.working.size(), 0);
   ASSERT_TRUE(r.coherence_disagreement.has_value());
   EXPECT_TRUE(sameBits((*r.coherence_disagreement)(1), 2.0 / 3.0));
   ASSERT_EQ(r.batch_samples.size(), 2u);
