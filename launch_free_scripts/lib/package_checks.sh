@@ -1,7 +1,8 @@
 # test.sh's install-space case: `catkin_make install` in the test workspace,
 # then the example model package (test/plugin_example/pc_ekf_quarter_car)
 # built in a workspace of its own against the install space only (its
-# <pc_ekf/...> headers, libraries and pluginlib), the installed
+# <pc_ekf/...> headers, libraries and pluginlib), the deprecated forwarding
+# header <pc_ekf/io/model_type.h> compiled alone, the installed
 # estimate_offline run once, no link from the install space into the sources,
 # and, in an environment with the install space alone (lib/install_space_run.sh):
 # rosrun estimator_node, demo.sh, plot_estimates. Writes
@@ -18,6 +19,10 @@ pc_ekf_install_check() {
     if ! (set +u; source "$PC_EKF_WS/install/setup.bash"; set -u
           cd "$down" && catkin_make -j"$(nproc)") >>"$log" 2>&1; then
       status=FAILED why="the example package did not build against the install space"
+    elif ! printf '#include <pc_ekf/io/model_type.h>\nint main() { return !pc_ekf::ModelRegistry::builtins().find("roll_plane"); }\n' |
+           g++ -std=c++17 -fsyntax-only -I"$PC_EKF_WS/install/include" -isystem /usr/include/eigen3 \
+             -x c++ - >>"$log" 2>&1; then
+      status=FAILED why="the deprecated <pc_ekf/io/model_type.h> does not compile against the install space"
     elif ! (set +u; source "$PC_EKF_WS/install/setup.bash"; set -u
             "$PC_EKF_WS/install/lib/pc_ekf/estimate_offline" \
               --config "$PC_EKF_WS/install/share/pc_ekf/config/speed_bump.yaml") >>"$log" 2>&1; then

@@ -35,6 +35,8 @@ struct ForecastReport {
   void merge(const ForecastReport& other);
 };
 
+struct ForecastWork;  // the forecast's per-thread buffers (pc_propagator_forecast.h)
+
 class PcPropagator {
  public:
   // threads: the forecast integrates the collocation points on this many
@@ -90,17 +92,35 @@ class PcPropagator {
   static constexpr long kBlock = 16;
 
  private:
-  // The forecast pipeline (pc_propagator_forecast.cpp) and how it splits its
-  // work: kUnsplit evaluates the points at once, integrates the usable ones
-  // in parts on the threads, projects them in one sum and drops unusable
-  // points (least squares on the rest); kBlocked gives each thread whole
-  // blocks of kBlock points and every per-point step of them (X A^T,
-  // preparation, integration, the products with P and the leave-one-out
-  // sums), the sums taken per block and the blocks added in order; it
-  // returns false, x untouched, when some point is not usable.
-  enum class ForecastSplit { kUnsplit, kBlocked };
-  bool forecastWith(ForecastSplit split, Eigen::MatrixXd& x, double t0, double t1,
-                    ForecastReport* report) const;
+  // The forecast (pc_propagator_forecast.cpp) is one of two algorithms over
+  // the same stages. forecastInBlocks gives each thread whole blocks of
+  // kBlock points and every per-point step of them (X A^T, preparation,
+  // integration, the products with P and the leave-one-out sums), the sums
+  // taken per block and the blocks added in order, so that no sum depends on
+  // the thread count; it returns false, x untouched, when some point is not
+  // usable. forecastDroppingUnusable evaluates the points at once, integrates
+  // the usable ones in parts on the threads, projects them in one sum and
+  // drops unusable points (least squares on the rest).
+  bool forecastInBlocks(Eigen::MatrixXd& x, double t0, double t1, ForecastWork& work,
+                        ForecastReport* report) const;
+  void forecastDroppingUnusable(Eigen::MatrixXd& x, double t0, double t1, ForecastWork& work,
+                                ForecastReport* report) const;
+  // Stages both take. 1: X A^T and the full model parameters of the points
+  // [begin, end) (work.at_points, work.params).
+  void evaluatePoints(const Eigen::MatrixXd& x, Eigen::Index begin, Eigen::Index end,
+                      ForecastWork& work) const;
+  // 3: the models of the points (columns of `params`) from t0 to t1, states `y`.
+  void integratePoints(const Eigen::MatrixXd& params, Eigen::ArrayXXd& y, double t0,
+                       double t1) const;
+  // 4: block b's share Y_b P_b^T of the projection, for the nq points from q0
+  // (their states' columns from y_cols), into work.state_sums.
+  void projectBlock(Eigen::Index b, Eigen::Index q0, Eigen::Index nq, const double* y_cols,
+                    ForecastWork& work) const;
+  // forecastInBlocks' steps: a block's sums (4 and the channels' sums for 5),
+  // and 5, the channels' leave-one-out error from the blocks' sums.
+  void sumBlock(Eigen::Index b, ForecastWork& work) const;
+  void leaveOneOutInBlocks(const Eigen::MatrixXd& x, ForecastWork& work,
+                           ForecastReport* report) const;
   void runParts(const std::vector<long>& bounds,
                 const std::function<void(int, long, long)>& job) const;
 

@@ -12,6 +12,7 @@
 #include "pc_ekf/io/config_identity.h"
 #include "pc_ekf/io/tolerances.h"
 #include "pc_ekf/io/vehicle_file.h"
+#include "pc_ekf/io/vehicle_section.h"
 #include "pc_ekf/io/yaml_reader.h"
 #include "pc_ekf/pc/polynomial_basis.h"
 
@@ -481,7 +482,7 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
     }
   }
   if (override_vehicle) {
-    c.truth.model = c.model_type->read(v, *c.model);
+    c.truth.model = readVehicleSection(v, c.model_type->description(), *c.model);
     v.finish();
   }
   // A tolerance's truth: the truth vehicle's value, as a germ coordinate that
@@ -625,7 +626,7 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   model.finish();
   {
     YamlMapReader v = root.map("vehicle");
-    c.model = c.model_type->read(v, *c.model_type->defaults());
+    c.model = readVehicleSection(v, c.model_type->description(), *c.model_type->defaults());
     v.finish();
   }
   c.uncertain = readUncertain(root, *c.model_type, *c.model);

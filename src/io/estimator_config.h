@@ -17,7 +17,7 @@
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/filter/update_safeguards.h"
 #include "pc_ekf/io/config_error.h"
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/road_input.h"
 #include "pc_ekf/model/road_profile.h"

@@ -5,7 +5,7 @@
 #include <limits>
 
 #include "pc_ekf/io/estimation_setup.h"
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 
 namespace pc_ekf {
 

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/uncertain_parameters.h"
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/pc/germ.h"
 
 namespace pc_ekf {

@@ -22,7 +22,7 @@
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/predictive_check.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/pc/pc_statistics.h"
 #include "pc_ekf/pc/polynomial_basis.h"
 

@@ -6,7 +6,7 @@
 // nodelet uses on this system.
 #pragma once
 
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 
 namespace pc_ekf {
 

@@ -5,7 +5,7 @@
 
 #include <string>
 
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/ros/bag_io.h"
 
 namespace pc_ekf {

@@ -11,7 +11,7 @@
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/io/road_free_stream.h"
 
 namespace pc_ekf {

@@ -5,7 +5,7 @@
 //   m_s z_s'' = -k u - c v,   m_u z_u'' = k u + c v - k_t (z_u - y),
 // with u = z_s - z_u (suspension extension) and v = u' (the two channels).
 // The whole plugin: its description (table) and its right-hand side.
-#include <pc_ekf/io/model_type.h>
+#include <pc_ekf/model/model_type.h>
 #include <pc_ekf/model/pointwise_model.h>
 
 #include <pluginlib/class_list_macros.hpp>

@@ -1,6 +1,6 @@
 #include <stdexcept>
 
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 
 namespace pc_ekf {
 

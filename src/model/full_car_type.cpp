@@ -3,7 +3,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "pc_ekf/io/model_type.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/model/full_car_model.h"
 #include "pc_ekf/model/full_car_road_free.h"
 #include "pc_ekf/model/full_car_road.h"
