@@ -654,13 +654,29 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   const std::size_t batch_terms = basisSize(n, c.pc_order, c.batchTruncation());
 
   YamlMapReader col = root.map("collocation");
-  // auto (the default): plain Halton up to kPlainHaltonMaxDimension germs,
-  // scrambled Halton above (collocation_design.h).
+  // auto (the default): when the config sets no point count nor a Halton
+  // setting (points, batch_points, start_index, seed), the tensor Gauss rule
+  // with pc.order + 1 nodes per germ if it has no more nodes than the default
+  // Q (autoGaussNodes; both designs then use them); otherwise plain Halton up
+  // to kPlainHaltonMaxDimension germs, scrambled Halton above
+  // (collocation_design.h), and a given `points` is that design's Q.
   std::string seq = "auto";
   col.text("sequence", seq);
   try {
-    c.collocation.sequence =
-        seq == "auto" ? defaultPointSequence(n) : pointSequenceFromString(seq);
+    if (seq == "auto") {
+      const bool halton_keys = col.has("points") || col.has("batch_points") ||
+                               col.has("start_index") || col.has("seed");
+      const int gauss_nodes =
+          halton_keys ? 0 : autoGaussNodes(n, c.pc_order, c.collocation.points);
+      if (gauss_nodes > 0) {
+        c.collocation.sequence = PointSequence::kGauss;
+        c.collocation.points = gauss_nodes;
+      } else {
+        c.collocation.sequence = defaultPointSequence(n);
+      }
+    } else {
+      c.collocation.sequence = pointSequenceFromString(seq);
+    }
   } catch (const std::invalid_argument&) {
     col.fail("sequence", "'" + seq + "'",
              "auto, halton, scrambled_halton, hammersley, gauss or smolyak");

@@ -98,6 +98,8 @@ struct TruthConfig {
 
 struct CollocationConfig {
   PointSequence sequence = PointSequence::kHalton;
+  // The parser's default; its `sequence: auto` may take the tensor Gauss rule
+  // instead (points = nodes per germ, autoGaussNodes).
   int points = 30;
   int level = -1;  // smolyak only; -1 = the PC order (the lowest exact for the projection)
   ProjectionMethod projection = ProjectionMethod::kAuto;

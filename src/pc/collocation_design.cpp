@@ -32,6 +32,12 @@ PointSequence defaultPointSequence(int dimension) {
                                               : PointSequence::kHalton;
 }
 
+int autoGaussNodes(int dimension, int order, int halton_points) {
+  if (dimension < 1 || order < 0) return 0;
+  const double nodes = std::pow(static_cast<double>(order + 1), dimension);
+  return nodes <= halton_points ? order + 1 : 0;
+}
+
 std::string toString(ProjectionMethod m) {
   switch (m) {
     case ProjectionMethod::kAuto:

@@ -7,6 +7,8 @@
 
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/pc/collocation_design.h"
+#include "pc_ekf/pc/polynomial_basis.h"
 
 namespace pc_ekf {
 namespace {
@@ -162,14 +164,100 @@ TEST(Config, ScrambledHaltonKeys) {
       std::string("collocation: {sequence: scrambled_halton, seed: 9}\n") + kMinimal, "ok.yaml");
   EXPECT_EQ(c.collocation.sequence, PointSequence::kScrambledHalton);
   EXPECT_EQ(c.collocation.seed, 9u);
-  // auto (also the default) is plain Halton at this dimension (n <= 12).
-  EXPECT_EQ(parseConfigString(std::string("collocation: {sequence: auto}\n") + kMinimal, "ok.yaml")
+  // auto with a point count is plain Halton at this dimension (n <= 12).
+  EXPECT_EQ(parseConfigString(std::string("collocation: {sequence: auto, points: 30}\n") + kMinimal,
+                              "ok.yaml")
                 .collocation.sequence,
             PointSequence::kHalton);
-  EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").collocation.sequence, PointSequence::kHalton);
   EXPECT_EQ(parseConfigString(kMinimal, "ok.yaml").collocation.seed, 1u);
   const std::string e = errorOf(std::string("collocation: {sequence: sobol}\n") + kMinimal);
   EXPECT_NE(e.find("scrambled_halton"), std::string::npos) << e;
+}
+
+// sequence auto without a point count: the tensor Gauss rule with order + 1
+// nodes per germ where it has no more nodes than the 30 default Halton
+// points, else Halton (scrambled above 12 germs); a count, start_index or
+// seed keeps Halton, the count being its Q.
+TEST(Config, AutoTakesTheTensorGaussRuleWhereItIsNoCostlier) {
+  const auto design = [](const std::string& yaml) {
+    return parseConfigString(yaml + kMinimal, "ok.yaml").collocation;
+  };
+  for (const char* pc : {"", "pc: {order: 4}\n"}) {  // the paper case: 5 x 5 = 25 <= 30
+    for (const char* col : {"", "collocation: {sequence: auto}\n"}) {
+      const CollocationConfig d = design(std::string(pc) + col);
+      EXPECT_EQ(d.sequence, PointSequence::kGauss) << pc << col;
+      EXPECT_EQ(d.points, 5) << pc << col;
+      EXPECT_EQ(d.batchPoints(), 5) << pc << col;
+      EXPECT_EQ(d.projection, ProjectionMethod::kAuto) << pc << col;  // quadrature for gauss
+    }
+  }
+  EXPECT_EQ(design("pc: {order: 3}\n").points, 4);
+  EXPECT_EQ(design("pc: {order: 3}\n").sequence, PointSequence::kGauss);
+  // 6 x 6 = 36 > 30: the 30 Halton points.
+  EXPECT_EQ(design("pc: {order: 5}\n").sequence, PointSequence::kHalton);
+  EXPECT_EQ(design("pc: {order: 5}\n").points, 30);
+  // A Halton setting keeps Halton, with the given count as Q.
+  for (const char* col :
+       {"collocation: {points: 30}\n", "collocation: {sequence: auto, points: 25}\n",
+        "collocation: {batch_points: 40}\n", "collocation: {start_index: 2}\n",
+        "collocation: {seed: 3}\n"}) {
+    EXPECT_EQ(design(col).sequence, PointSequence::kHalton) << col;
+  }
+  EXPECT_EQ(design("collocation: {points: 25}\n").points, 25);
+  EXPECT_EQ(design("collocation: {batch_points: 40}\n").points, 30);
+  EXPECT_EQ(design("collocation: {batch_points: 40}\n").batchPoints(), 40);
+  // Projection and the other keys leave the choice alone.
+  EXPECT_EQ(design("collocation: {projection: regression}\n").sequence, PointSequence::kGauss);
+  EXPECT_EQ(design("collocation: {projection: quadrature}\n").sequence, PointSequence::kGauss);
+  EXPECT_EQ(design("collocation: {threads: 2, max_condition: 1e6}\n").sequence,
+            PointSequence::kGauss);
+
+  // Three germs: 3^3 = 27 at order 2; 5^3 = 125 at order 4 keeps Halton
+  // (whose 30 points are then too few for S = 35, as before).
+  const std::string three = std::string(kMinimal) + "tolerances: {spring_linear_left: 0.1}\n";
+  const EstimatorConfig c3 = parseConfigString("pc: {order: 2}\n" + three, "ok.yaml");
+  EXPECT_EQ(c3.collocation.sequence, PointSequence::kGauss);
+  EXPECT_EQ(c3.collocation.points, 3);
+  const std::string e = errorOf(three);
+  EXPECT_NE(e.find("collocation.points"), std::string::npos) << e;
+  EXPECT_NE(e.find("S = 35"), std::string::npos) << e;
+  // Four germs, order 1: 2^4 = 16; five: 2^5 = 32 > 30.
+  const EstimatorConfig c4 = parseConfigString(
+      std::string("pc: {order: 1}\n") + kMinimal +
+          "tolerances: {spring_linear_left: 0.1, damping_left: 0.1}\n",
+      "ok.yaml");
+  EXPECT_EQ(c4.collocation.sequence, PointSequence::kGauss);
+  EXPECT_EQ(c4.collocation.points, 2);
+  const EstimatorConfig c5 = parseConfigString(
+      std::string("pc: {order: 1}\n") + kMinimal +
+          "tolerances: {spring_linear_left: 0.1, damping_left: 0.1, tyre_stiffness_left: 0.1}\n",
+      "ok.yaml");
+  EXPECT_EQ(c5.collocation.sequence, PointSequence::kHalton);
+  EXPECT_EQ(c5.collocation.points, 30);
+}
+
+// The batch methods' basis may be larger (batch_tolerance_interactions) but
+// stays within total degree p, which the order + 1 Gauss nodes per germ
+// resolve: auto's rule serves both designs.
+TEST(Config, AutoGaussServesTheBatchDesign) {
+  const EstimatorConfig c = parseConfigString(
+      "pc: {order: 2, tolerance_interactions: false, batch_tolerance_interactions: true}\n"
+      "uncertain:\n"
+      "  - {name: added_mass, nominal: 200.0, relative_range: 0.5}\n"
+      "tolerances: {spring_linear_left: 0.1, damping_left: 0.1}\n",
+      "ok.yaml");
+  EXPECT_EQ(c.collocation.sequence, PointSequence::kGauss);
+  EXPECT_EQ(c.collocation.points, 3);
+  EXPECT_EQ(c.collocation.batchPoints(), 3);
+  for (const BasisTruncation& t : {c.pc_truncation, c.batchTruncation()}) {
+    const PolynomialBasis basis(c.germs(), c.pc_order, t);
+    const CollocationDesign d(basis, c.collocation.sequence, c.collocation.batchPoints());
+    EXPECT_EQ(d.pointCount(), 27);
+    EXPECT_EQ(d.projection(), ProjectionMethod::kQuadrature);
+    EXPECT_NEAR(d.conditionNumber(), 1.0, 1e-9);  // exact to degree 2p: orthonormal columns
+  }
+  EXPECT_EQ(PolynomialBasis(c.germs(), 2, c.batchTruncation()).size(), 10);  // total degree
+  EXPECT_EQ(PolynomialBasis(c.germs(), 2, c.pc_truncation).size(), 9);  // no tolerance product
 }
 
 TEST(Config, SparseGridKeys) {
@@ -191,7 +279,7 @@ TEST(Config, SparseGridKeys) {
       errorOf(std::string("collocation: {sequence: smolyak, level: 3, projection: quadrature}\n") +
               kMinimal);
   EXPECT_NE(e.find("collocation.level"), std::string::npos) << e;
-  e = errorOf(std::string("collocation: {projection: quadrature}\n") + kMinimal);
+  e = errorOf(std::string("collocation: {sequence: halton, projection: quadrature}\n") + kMinimal);
   EXPECT_NE(e.find("collocation.projection"), std::string::npos) << e;
   e = errorOf(std::string("collocation: {projection: lsq}\n") + kMinimal);
   EXPECT_NE(e.find("collocation.projection"), std::string::npos) << e;

@@ -75,6 +75,15 @@ TEST(ScrambledHalton, DefaultSequenceAndDesign) {
   EXPECT_EQ(defaultPointSequence(2), PointSequence::kHalton);
   EXPECT_EQ(defaultPointSequence(kPlainHaltonMaxDimension), PointSequence::kHalton);
   EXPECT_EQ(defaultPointSequence(kPlainHaltonMaxDimension + 1), PointSequence::kScrambledHalton);
+  // auto's tensor Gauss rule: order + 1 nodes per germ while (order + 1)^n <= Q.
+  EXPECT_EQ(autoGaussNodes(2, 4, 30), 5);   // 25
+  EXPECT_EQ(autoGaussNodes(2, 4, 24), 0);   // 25 > 24
+  EXPECT_EQ(autoGaussNodes(2, 5, 30), 0);   // 36
+  EXPECT_EQ(autoGaussNodes(1, 4, 30), 5);
+  EXPECT_EQ(autoGaussNodes(3, 2, 30), 3);   // 27
+  EXPECT_EQ(autoGaussNodes(3, 3, 30), 0);   // 64
+  EXPECT_EQ(autoGaussNodes(5, 1, 30), 0);   // 32
+  EXPECT_EQ(autoGaussNodes(40, 2, 30), 0);  // 3^40: no overflow
   EXPECT_EQ(pointSequenceFromString("scrambled_halton"), PointSequence::kScrambledHalton);
   EXPECT_EQ(toString(PointSequence::kScrambledHalton), "scrambled_halton");
 
