@@ -222,16 +222,16 @@ TEST(Config, AutoTakesTheTensorGaussRuleWhereItIsNoCostlier) {
   EXPECT_NE(e.find("collocation.points"), std::string::npos) << e;
   EXPECT_NE(e.find("S = 35"), std::string::npos) << e;
   // Four germs, order 1: 2^4 = 16; five: 2^5 = 32 > 30.
-  const EstimatorConfig c4 = parseConfigString(
-      std::string("pc: {order: 1}\n") + kMinimal +
-          "tolerances: {spring_linear_left: 0.1, damping_left: 0.1}\n",
-      "ok.yaml");
+  const auto orderOne = [](const std::string& tolerances) {
+    return parseConfigString(std::string("pc: {order: 1}\n") + kMinimal + "tolerances: {" +
+                                 tolerances + "}\n",
+                             "ok.yaml");
+  };
+  const EstimatorConfig c4 = orderOne("spring_linear_left: 0.1, damping_left: 0.1");
   EXPECT_EQ(c4.collocation.sequence, PointSequence::kGauss);
   EXPECT_EQ(c4.collocation.points, 2);
-  const EstimatorConfig c5 = parseConfigString(
-      std::string("pc: {order: 1}\n") + kMinimal +
-          "tolerances: {spring_linear_left: 0.1, damping_left: 0.1, tyre_stiffness_left: 0.1}\n",
-      "ok.yaml");
+  const EstimatorConfig c5 =
+      orderOne("spring_linear_left: 0.1, damping_left: 0.1, tyre_stiffness_left: 0.1");
   EXPECT_EQ(c5.collocation.sequence, PointSequence::kHalton);
   EXPECT_EQ(c5.collocation.points, 30);
 }
