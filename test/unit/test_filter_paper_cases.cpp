@@ -136,6 +136,24 @@ TEST(PaperCaseB, RelinearizationEndsOnRestoreAndStartsAgainOnReset) {
   EXPECT_EQ(r.restarts, 0);
   EXPECT_EQ(r.mean, p.mean);  // bit for bit: no restart came before sample 6
   EXPECT_NE(f.mean, p.mean);
+  // The working prior travels with a restored state (a checkpoint's
+  // full.working): the restored filter reports what the live one did; without
+  // it, the filter's own (uncorrected) state.
+  ASSERT_TRUE(run.config.safeguards.relinearize.prior_correction);
+  ASSERT_GT(fresh.workingPrior().size(), 0);
+  OneStepFilter resumed(prop, makeOneStepSettings(run.config));
+  resumed.restore(fresh.state(), fresh.time(), fresh.samples(), fresh.workingPrior());
+  StepResult reported;
+  reported.coefficients = resumed.state().bottomRows(prop->parameterCount());
+  resumed.report(reported);
+  EXPECT_EQ(reported.mean, f.mean);
+  EXPECT_EQ(reported.stddev, f.stddev);
+  resumed.restore(fresh.state(), fresh.time(), fresh.samples());
+  StepResult own;
+  own.coefficients = resumed.state().bottomRows(prop->parameterCount());
+  resumed.report(own);
+  EXPECT_EQ(own.coefficients, fresh.state().bottomRows(prop->parameterCount()));
+  EXPECT_NE(own.coefficients, f.coefficients);
   fresh.reset();
   StepResult again;
   for (const Measurement& m : run.data) again = fresh.process(m);
