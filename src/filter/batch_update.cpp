@@ -109,7 +109,7 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
     throw std::invalid_argument("batchUpdateRestarted: need restarts >= 0 and width > 1");
   }
   BatchResult result = batchUpdate(propagator, series, noise, rule, alphas, support);
-  const Eigen::MatrixXd prior = propagator.priorState().bottomRows(propagator.parameterCount());
+  const Eigen::MatrixXd prior = propagator.mapping().priorCoefficients(propagator.basis());
   const Eigen::VectorXd prior_std = pcStddev(prior);
   for (int k = 0; k < restarts.restarts && result.finite && result.forecast.ok; ++k) {
     const ParameterMapping& map = propagator.mapping();

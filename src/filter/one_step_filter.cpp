@@ -114,6 +114,7 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
       rates_(rateSettings(settings.health, settings.innovation_gate)),
       x_(propagator_->priorState()) {
   const int n = propagator_->parameterCount();
+  prior_theta_ = x_.bottomRows(n);
   lower_.resize(n);
   upper_.resize(n);
   for (int i = 0; i < n; ++i) {
@@ -207,8 +208,7 @@ StepResult OneStepFilter::process(const Measurement& m) {
 void OneStepFilter::report(StepResult& r) const {
   if (settings_.relinearize.prior_correction && working_theta_.size() > 0 &&
       r.coefficients.allFinite() &&
-      correctForPrior(propagator_->priorState().bottomRows(propagator_->parameterCount()),
-                      working_theta_, r.coefficients)) {
+      correctForPrior(prior_theta_, working_theta_, r.coefficients)) {
     r.mean = pcMean(r.coefficients);
     r.stddev = pcStddev(r.coefficients);
   }

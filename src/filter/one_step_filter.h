@@ -137,6 +137,7 @@ class OneStepFilter {
   // The prior the state's parameters were updated from, when it is a working
   // prior (relinearize.prior_correction); empty when it is the prior itself.
   Eigen::MatrixXd working_theta_;
+  Eigen::MatrixXd prior_theta_;  // the prior's parameter coefficients (report's reference)
   StepResult processSample(const Measurement& m);
   int restarts_ = 0;
   std::unique_ptr<DeferredRerun> rerun_;  // a deferred re-run under way
