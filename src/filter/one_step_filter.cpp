@@ -1,5 +1,6 @@
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/prior_correction.h"
+#include "pc_ekf/filter/reopen_chance.h"
 
 #include <cmath>
 #include <condition_variable>
@@ -407,7 +408,14 @@ StepResult OneStepFilter::step(const Measurement& m) {
     r.health.reopened = true;
   }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
-  r.health.rates = rates_.add(r.time, r.gated, r.health.damped, r.reopened, support);
+  // The rule's chance re-opens at this sample's dof: a correct model at a
+  // high sampling rate re-opens now and then, and that is no misfit.
+  const double chance =
+      settings_.reopen.mode == ReopenMode::kOff || r.update.channels < 1
+          ? 0.0
+          : chanceReopenPerSample(settings_.health.nis_window, r.update.channels,
+                                  settings_.health.nis_confidence, settings_.reopen.after);
+  r.health.rates = rates_.add(r.time, r.gated, r.health.damped, r.reopened, support, chance);
   return r;
 }
 

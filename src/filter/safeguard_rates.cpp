@@ -92,8 +92,9 @@ std::vector<std::string> SafeguardRates::warnings() const {
   return w;
 }
 
-void SafeguardRateMonitor::Counts::add(int sign, bool g, bool d, bool r, int s) {
+void SafeguardRateMonitor::Counts::add(int sign, bool g, bool d, bool r, int s, double chance) {
   samples += sign;
+  reopen_chance += sign * chance;
   gated += sign * g;
   damped += sign * d;
   reopened += sign * r;
@@ -122,24 +123,25 @@ RateCheck SafeguardRateMonitor::binomial(long count, long trials, double p) cons
   return c;
 }
 
-RateCheck SafeguardRateMonitor::poisson(long count, double exposure, double rate) const {
+RateCheck SafeguardRateMonitor::poisson(long count, double exposure, double rate,
+                                        double chance) const {
   RateCheck c;
   c.count = count;
   c.exposure = exposure;
-  c.expected = rate * exposure;
+  c.expected = rate * exposure + std::max(0.0, chance);
   c.tail = poissonUpperTail(count, c.expected);
   c.flagged = c.tail < 1.0 - settings_.confidence;
   return c;
 }
 
 SafeguardRates SafeguardRateMonitor::add(double time, bool gated, bool damped, bool reopened,
-                                         int support) {
-  events_.push_back({time, gated, damped, reopened, support});
-  window_.add(+1, gated, damped, reopened, support);
-  run_.add(+1, gated, damped, reopened, support);
+                                         int support, double reopen_chance) {
+  events_.push_back({time, gated, damped, reopened, support, reopen_chance});
+  window_.add(+1, gated, damped, reopened, support, reopen_chance);
+  run_.add(+1, gated, damped, reopened, support, reopen_chance);
   while (!events_.empty() && events_.front().time <= time - settings_.window) {
     const Event& e = events_.front();
-    window_.add(-1, e.gated, e.damped, e.reopened, e.support);
+    window_.add(-1, e.gated, e.damped, e.reopened, e.support, e.reopen_chance);
     events_.pop_front();
   }
   const double run_exposure = std::max(0.0, time - start_);
@@ -151,8 +153,8 @@ SafeguardRates SafeguardRateMonitor::add(double time, bool gated, bool damped, b
              binomial(run_.gated, run_.samples, s.gate_probability)};
   r.damped = {binomial(window_.damped, window_.samples, s.damp_fraction),
               binomial(run_.damped, run_.samples, s.damp_fraction)};
-  r.reopened = {poisson(window_.reopened, window_exposure, s.reopen_rate),
-                poisson(run_.reopened, run_exposure, s.reopen_rate)};
+  r.reopened = {poisson(window_.reopened, window_exposure, s.reopen_rate, window_.reopen_chance),
+                poisson(run_.reopened, run_exposure, s.reopen_rate, run_.reopen_chance)};
   r.support = {binomial(window_.support, window_.support_trials, s.support_fraction),
                binomial(run_.support, run_.support_trials, s.support_fraction)};
   return r;

@@ -63,22 +63,28 @@ class SafeguardRateMonitor {
   // Forgets every sample; the run's exposure starts at `start_time`.
   void reset(double start_time);
   // One processed sample. support: 1 = mass above the limit, 0 = not, -1 = not assessed.
-  SafeguardRates add(double time, bool gated, bool damped, bool reopened, int support);
+  // reopen_chance: the probability that the re-open rule fired at this sample
+  // under the model (chanceReopenPerSample; 0 without re-opens), expected on
+  // top of the load changes.
+  SafeguardRates add(double time, bool gated, bool damped, bool reopened, int support,
+                     double reopen_chance = 0.0);
   long samples() const { return run_.samples; }
   const RateSettings& settings() const { return settings_; }
 
  private:
   struct Counts {
     long samples = 0, gated = 0, damped = 0, reopened = 0, support_trials = 0, support = 0;
-    void add(int sign, bool g, bool d, bool r, int s);
+    double reopen_chance = 0.0;  // expected chance re-opens
+    void add(int sign, bool g, bool d, bool r, int s, double chance);
   };
   struct Event {
     double time;
     bool gated, damped, reopened;
     int support;
+    double reopen_chance;
   };
   RateCheck binomial(long count, long trials, double p) const;
-  RateCheck poisson(long count, double exposure, double rate) const;
+  RateCheck poisson(long count, double exposure, double rate, double chance) const;
 
   RateSettings settings_;
   double start_ = 0.0;

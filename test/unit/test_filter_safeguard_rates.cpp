@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 
+#include "pc_ekf/filter/reopen_chance.h"
 #include "pc_ekf/filter/safeguard_rates.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
@@ -155,6 +156,47 @@ TEST(SafeguardRateMonitor, ReopensAgainstTheLoadChangeRate) {
   EXPECT_EQ(first_flag, 25);
 }
 
+TEST(ChanceReopens, TheRuleInClosedFormForAOneSampleWindow) {
+  // Window 1: each sample is judged alone, outside with q = 1 - confidence.
+  // after 1: a re-open at every outside sample, rate q. after 2: two outside
+  // in a row (the window cleared after each re-open), a renewal process with
+  // mean waiting time (1 + q) / q^2. Monte Carlo error of 200 000 samples.
+  EXPECT_NEAR(chanceReopenPerSample(1, 3, 0.99, 1), 0.01, 4.0 * std::sqrt(0.01 / 2e5));
+  EXPECT_NEAR(chanceReopenPerSample(1, 2, 0.8, 1), 0.2, 4.0 * std::sqrt(0.2 * 0.8 / 2e5));
+  const double q = 0.2, rate = q * q / (1.0 + q);
+  EXPECT_NEAR(chanceReopenPerSample(1, 2, 0.8, 2), rate, 4.0 * std::sqrt(rate / 2e5));
+  // A 20-sample window at 99 %: about 1 % of the samples are outside, in runs,
+  // so a re-open after 3 comes a few times per 1000 samples; more rarely after 10.
+  const double w3 = chanceReopenPerSample(20, 3, 0.99, 3);
+  const double w10 = chanceReopenPerSample(20, 3, 0.99, 10);
+  std::printf("chance re-opens per sample: window 20, 3 dof, after 3: %g; after 10: %g\n", w3, w10);
+  EXPECT_GT(w3, 5e-4);
+  EXPECT_LT(w3, 1e-2 / 3.0);
+  EXPECT_LT(w10, w3);
+  EXPECT_THROW(chanceReopenPerSample(0, 3, 0.99, 3), std::invalid_argument);
+}
+
+TEST(SafeguardRateMonitor, ChanceReopensAreExpectedBesideLoadChanges) {
+  // 10 s at 200 Hz, three re-opens. Load changes alone (1 per 60 s) expect
+  // 0.167: flagged (P = 6.8e-4). With the rule's chance rate of 1.5e-3 per
+  // sample the model expects 3.17: P(X >= 3) = 0.61, not flagged.
+  RateSettings s = rates(0.0);
+  SafeguardRateMonitor m(s);
+  SafeguardRates without, with;
+  m.reset(0.0);
+  for (int i = 1; i <= 2000; ++i) without = m.add(0.005 * i, false, false, i % 600 == 0, 0);
+  m.reset(0.0);
+  for (int i = 1; i <= 2000; ++i) with = m.add(0.005 * i, false, false, i % 600 == 0, 0, 1.5e-3);
+  EXPECT_EQ(without.reopened.run.count, 3);
+  EXPECT_TRUE(without.reopened.run.flagged);
+  EXPECT_NEAR(with.reopened.run.expected, 10.0 / 60.0 + 3.0, 1e-9);
+  // The 1 s window: its own 200 samples' chance.
+  EXPECT_NEAR(with.reopened.window.expected, 1.0 / 60.0 + 1.5e-3 * 200, 1e-9);
+  const double mu = 10.0 / 60.0 + 3.0;
+  EXPECT_NEAR(with.reopened.run.tail, 1.0 - std::exp(-mu) * (1.0 + mu + mu * mu / 2.0), 1e-12);
+  EXPECT_FALSE(with.flagged());
+}
+
 // ---- the one-step filter ----
 
 // The speed bump with the live configs' safeguards (vehicle_live.yaml: gate
@@ -256,6 +298,32 @@ TEST(SafeguardRateFilter, ExactModelControlsOverFiftySeeds) {
               "re-opens %ld\n", unhealthy, seeds, rates_flagged, gated, damped, reopened);
   EXPECT_EQ(rates_flagged, 0);
   EXPECT_LE(unhealthy, 2);  // <= 5 % of 50 (rounded down: 4 % allowed)
+}
+
+TEST(SafeguardRateFilter, AnExactModelAtAHighRateReopensAsOftenAsTheRuleExpects) {
+  // 1000 samples over the bump with the live safeguards: the window rule
+  // re-opens a correct model by chance. Over 20 seeds the re-opens match the
+  // summed chance expectation (Poisson bounds at 99.9 %), and the rate check
+  // flags at most one seed.
+  const EstimatorConfig c = liveBump(1000);
+  const auto model = makeModel(c, makeRoad(c));
+  long reopened = 0, flagged = 0;
+  double expected_chance = 0.0;
+  const int seeds = 20;
+  for (int seed = 1; seed <= seeds; ++seed) {
+    const OfflineResult r = runOfflineEstimation(c, synthesizeFromConfig(c, *model, seed), model,
+                                                 EstimationMethod::kOneStep, seed);
+    reopened += r.reopened;
+    flagged += r.safeguard_rates.reopened.flagged();
+    expected_chance += r.safeguard_rates.reopened.run.expected -
+                       r.safeguard_rates.reopened.run.exposure / c.health.reopen_interval;
+  }
+  std::printf("exact model, 1000 samples x %d seeds: %ld re-opens, %.2f expected by chance, "
+              "%ld seeds flagged\n", seeds, reopened, expected_chance, flagged);
+  EXPECT_GT(expected_chance, 1.0);
+  EXPECT_GT(poissonUpperTail(reopened, expected_chance), 1e-3);         // not too many
+  EXPECT_GT(1.0 - poissonUpperTail(reopened + 1, expected_chance), 1e-3);  // nor too few
+  EXPECT_LE(flagged, 1);
 }
 
 }  // namespace

@@ -1,0 +1,73 @@
+#include "pc_ekf/filter/reopen_chance.h"
+
+#include <cmath>
+#include <map>
+#include <mutex>
+#include <random>
+#include <stdexcept>
+#include <tuple>
+#include <vector>
+
+#include "pc_ekf/filter/health.h"
+
+namespace pc_ekf {
+namespace {
+
+// About 5 % relative error at 2e-3 per sample (400 events), in ~20 ms once
+// per process; at lower rates the expected count matters little.
+constexpr long kSamples = 200000;
+
+double simulate(int window, int dof, double confidence, int after) {
+  const double tail = (1.0 - confidence) / 2.0;
+  const double lower = chiSquareQuantile(tail, static_cast<double>(window) * dof);
+  const double upper = chiSquareQuantile(1.0 - tail, static_cast<double>(window) * dof);
+  // chi2(dof) as 2 Gamma(dof / 2): one draw per sample whatever dof is.
+  std::mt19937_64 rng(20261204);
+  std::gamma_distribution<double> half_chi2(dof / 2.0, 2.0);
+  std::vector<double> ring(static_cast<std::size_t>(window));
+  int filled = 0;
+  double sum = 0.0;
+  long reopens = 0;
+  int violations = 0;
+  for (long k = 0; k < kSamples; ++k) {
+    const double x = half_chi2(rng);
+    double& slot = ring[static_cast<std::size_t>(k % window)];
+    if (filled == window) {
+      sum -= slot;
+    } else {
+      ++filled;
+    }
+    slot = x;
+    sum += x;
+    const bool outside = filled == window && (sum < lower || sum > upper);
+    violations = outside ? violations + 1 : 0;
+    if (violations >= after) {
+      ++reopens;
+      violations = 0;
+      filled = 0;
+      sum = 0.0;
+    }
+  }
+  return static_cast<double>(reopens) / static_cast<double>(kSamples);
+}
+
+}  // namespace
+
+double chanceReopenPerSample(int window, int dof, double confidence, int after) {
+  if (window < 1 || dof < 1 || after < 1 || !(confidence > 0.0 && confidence < 1.0)) {
+    throw std::invalid_argument("chanceReopenPerSample: need window, dof, after >= 1 and 0 < confidence < 1");
+  }
+  static std::mutex mutex;
+  static std::map<std::tuple<int, int, double, int>, double> cache;
+  const auto key = std::make_tuple(window, dof, confidence, after);
+  {
+    std::lock_guard<std::mutex> lock(mutex);
+    const auto it = cache.find(key);
+    if (it != cache.end()) return it->second;
+  }
+  const double p = simulate(window, dof, confidence, after);
+  std::lock_guard<std::mutex> lock(mutex);
+  return cache.emplace(key, p).first->second;
+}
+
+}  // namespace pc_ekf
