@@ -398,7 +398,11 @@ StepResult OneStepFilter::step(const Measurement& m) {
   r.health.damped = r.damping < 1.0;
   r.rejected = rejected_;
   r.restarts = restarts_;
-  violations_ = r.health.nis_window_outside ? violations_ + 1 : 0;
+  // Only a window above its upper bound counts towards a re-open: a load that
+  // changes makes the innovations large. A window below its lower bound (the
+  // noise overstated) stays a health finding; widening would not mend it.
+  const bool above = r.health.nis_window_outside && r.health.nis_window_mean > r.health.window_upper;
+  violations_ = above ? violations_ + 1 : 0;
   if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
     reopenExtendedState(x_, static_cast<int>(x_.rows()) - np,
                         propagator_->priorState().bottomRows(np), settings_.reopen);

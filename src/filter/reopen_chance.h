@@ -1,7 +1,7 @@
 // The re-open rule's own false alarms (docs/method.md §5.9). Under the model
-// the windowed NIS still leaves its two-sided bounds now and then, and
-// `after` consecutive such samples re-open the filter: a few times in 10 s of
-// a correct model at 200 Hz. The re-open rate check expects these besides the
+// the windowed NIS still rises above its upper bound now and then, and
+// `after` consecutive such samples re-open the filter: one or two times in
+// 10 s of a correct model at 200 Hz. The re-open rate check expects these besides the
 // load changes, so a healthy fast stream is not flagged for them.
 #pragma once
 
@@ -10,8 +10,8 @@ namespace pc_ekf {
 // Probability per sample that the rule re-opens a filter whose NIS is
 // chi-square with `dof` degrees of freedom at every sample, independent
 // between samples: the windowed mean over `window` samples (judged only when
-// full) outside the two-sided `confidence` bounds for `after` consecutive
-// samples, the window cleared after each re-open. Estimated once per
+// full) above the upper bound of the two-sided `confidence` interval for
+// `after` consecutive samples, the window cleared after each re-open. Estimated once per
 // argument set by a seeded simulation of the rule (cached; thread-safe).
 double chanceReopenPerSample(int window, int dof, double confidence, int after);
 

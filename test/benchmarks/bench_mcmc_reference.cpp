@@ -6,7 +6,7 @@
 // reference mean +- std (R-hat, ESS) and each filter's mean error and std
 // ratio in reference std units. Not part of bench.sh (minutes of wall time).
 //   PC_EKF_MCMC_CHAINS (16), PC_EKF_MCMC_BURN_IN (4000), PC_EKF_MCMC_SAMPLES (20000),
-//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file),
+//   PC_EKF_MCMC_SEED (1), PC_EKF_MCMC_CONFIG (that file; road.source none too),
 //   PC_EKF_MCMC_SAMPLER (metropolis; ensemble: CHAINS are then the walkers; hamiltonian;
 //   conditional_laplace: CHAINS are batches of SAMPLES independent draws, BURN_IN unused,
 //   PC_EKF_MCMC_RIDGE (2) ridge dimensions, PC_EKF_MCMC_GRID (21) nodes per ridge axis),
@@ -20,6 +20,7 @@
 #include "bench_support.h"
 #include "pc_ekf/filter/mcmc_reference.h"
 #include "pc_ekf/io/offline_estimation.h"
+#include "pc_ekf/io/road_free_stream.h"
 
 namespace pc_ekf::bench {
 namespace {
@@ -29,11 +30,23 @@ long envInt(const char* name, long fallback) {
   return v ? std::atol(v) : fallback;
 }
 
+Scenario roadFreeScenario(const EstimatorConfig& c) {
+  const RoadFreeRecord split =
+      roadFreeRecord(c, synthesizeFromConfig(c, *truthOnItsRoad(c), c.truth.seed));
+  Scenario s;
+  s.config = c;
+  s.model = split.model;
+  s.series = split.outputs;
+  return s;
+}
+
 void BM_McmcReferenceN11(benchmark::State& state) {
   const char* path = std::getenv("PC_EKF_MCMC_CONFIG");
   const EstimatorConfig c = loadConfigFile(
       path ? path : std::string(PC_EKF_SOURCE_DIR) + "/test/benchmarks/tolerances_n11.yaml");
-  const Scenario s = makeScenario(c, c.truth.seed);
+  // road.source none: the truth drives its own road, and the estimator's
+  // model is built from the record (its outputs carry the inherited variances).
+  const Scenario s = c.road.source == RoadSource::kNone ? roadFreeScenario(c) : makeScenario(c, c.truth.seed);
   const ParameterMapping mapping(*s.model, c.uncertain);
   const OfflineResult one_step =
       runOfflineEstimation(c, s.series, s.model, EstimationMethod::kOneStep, c.truth.seed);
