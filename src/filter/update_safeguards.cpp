@@ -83,7 +83,15 @@ void reopenParameters(Eigen::MatrixXd& theta, const Eigen::MatrixXd& prior,
   if (s.mode == ReopenMode::kPrior) {
     theta = prior;
   } else if (s.mode == ReopenMode::kWidth) {
-    theta.rightCols(theta.cols() - 1) = s.width * prior.rightCols(prior.cols() - 1);
+    // Widen, never narrow: a parameter the readings barely inform (a vehicle
+    // tolerance near its prior's width) keeps its spread and its correlations.
+    const Eigen::Index higher = theta.cols() - 1;
+    for (Eigen::Index i = 0; i < theta.rows(); ++i) {
+      const double wide = s.width * prior.row(i).tail(higher).norm();
+      if (theta.row(i).tail(higher).norm() < wide) {
+        theta.row(i).tail(higher) = s.width * prior.row(i).tail(higher);
+      }
+    }
   }
 }
 

@@ -93,6 +93,23 @@ TEST(Reopen, WidthAroundTheMeanOrBackToThePrior) {
   Eigen::MatrixXd p = theta;
   reopenParameters(p, prior, {ReopenMode::kPrior, 0.5, 10});
   EXPECT_EQ(p, prior);
+  // Widen, never narrow: a spring whose std (600.3) is above width x its
+  // prior's (0.5 x 865.7) keeps its coefficients; M (std 0.1) is widened.
+  Eigen::MatrixXd two(2, 3), prior2(2, 3);
+  prior2 << 200.0, 40.0, 0.0, 19357.2, 0.0, 865.7;
+  two << 230.0, 0.1, 0.01, 19500.0, 600.0, 18.0;
+  Eigen::MatrixXd wide = two;
+  reopenParameters(wide, prior2, {ReopenMode::kWidth, 0.5, 10});
+  EXPECT_DOUBLE_EQ(wide(0, 1), 20.0);
+  EXPECT_DOUBLE_EQ(wide(0, 2), 0.0);
+  EXPECT_EQ(Eigen::VectorXd(wide.row(1).transpose()), Eigen::VectorXd(two.row(1).transpose()));
+  // The same spring at std 30: widened to 0.5 x its prior, about its mean.
+  two(1, 1) = 24.0;
+  wide = two;
+  reopenParameters(wide, prior2, {ReopenMode::kWidth, 0.5, 10});
+  EXPECT_DOUBLE_EQ(wide(1, 0), 19500.0);
+  EXPECT_DOUBLE_EQ(wide(1, 1), 0.0);
+  EXPECT_DOUBLE_EQ(wide(1, 2), 0.5 * 865.7);
 }
 
 // The states keep their regression on the parameters and their residual
