@@ -3,7 +3,7 @@
 runs and spreads of M and d_CG (config/vehicle_imu.yaml, road.source none).
 
   /usr/bin/python3 scripts/road_free_study.py BIN_DIR [--seeds N] [--methods one_step,es_mda]
-      [--full-car]
+      [--full-car] [--model-errors] [--roads deck,ISO]
 
 --full-car: the same on config/full_car_live.yaml made road-free (IMU
 channels accel_y, accel_z, gyro_x, gyro_y at O; loads 150 kg at x 1.0 m,
@@ -44,10 +44,65 @@ ROADS = {
     "ISO B, 36 km/h, 10 s": ("{source: iso8608, speed_kmh: 36.0, iso8608: {class: B, seed: %d}}", 10.0),
     "ISO C, 54 km/h, 10 s": ("{source: iso8608, speed_kmh: 54.0, iso8608: {class: C, seed: %d}}", 10.0),
     "bump, 16 km/h, 3 s": ("{source: speed_bump}", 3.0),
+    "deck, 36 km/h, 10 s": ("{source: profile, speed_kmh: 36.0, profile: {file: %s}}", 10.0),
+    "bump on deck, 16 km/h, 3 s": ("{source: profile, speed_kmh: 16.0, profile: {file: %s}}", 3.0),
 }
 
 
+def deck_profile(path, seed, length, bump):
+    """A measured-like concrete deck as CSV s,left,right (m), 2 cm spacing:
+    slabs of 4-6 m with faulted joints (steps of 1.5 mm RMS, shared by both
+    tracks) and curled edges (1-2 mm), unevenness of ISO class A-B (partly
+    correlated tracks) and a long grade that detrending removes; 2-6 mm RMS
+    about a 20 m moving mean. bump: the paper's speed bump (100 / 80 mm, 1 m
+    ramps and top, the right track 0.6 m later) laid on it 2 m in."""
+    import numpy as np
+    rng = np.random.default_rng(1000 + seed)
+    s = np.arange(0.0, length, 0.02)
+    joints = np.cumsum(rng.uniform(4.0, 6.0, int(length / 4.0) + 2))
+    slab = np.searchsorted(joints, s)
+    start = np.concatenate(([0.0], joints))[slab]
+    end = joints[slab]
+    x = (s - start) / (end - start) * 2.0 - 1.0          # -1 .. 1 along each slab
+    fault = np.cumsum(rng.normal(0.0, 1.5e-3, joints.size + 1))[slab]
+    curl = rng.uniform(1e-3, 2e-3, joints.size + 1)[slab] * x * x
+    tracks = []
+    shared = None
+    for t in range(2):
+        n = np.exp(np.linspace(np.log(0.05), np.log(5.0), 120))   # cycles/m
+        gd = rng.uniform(8e-6, 40e-6) * (n / 0.1) ** -2.0
+        amp = np.sqrt(2.0 * gd * np.gradient(n))
+        phase = rng.uniform(0.0, 2.0 * np.pi, n.size)
+        own = (amp[None, :] * np.sin(2 * np.pi * n[None, :] * s[:, None] + phase[None, :])).sum(1)
+        shared = own if shared is None else shared
+        texture = own if t == 0 else 0.6 * shared + 0.8 * own
+        grade = 0.01 * np.sin(2 * np.pi * s / 60.0 + t)
+        tracks.append(fault + curl + texture + grade)
+    fade = np.clip(s / 2.0, 0.0, 1.0)
+    left, right = (fade * (h - h[0]) for h in tracks)
+    if bump:
+        def ramp(z, height):
+            return height * np.clip(np.minimum(z, 3.0 - z), 0.0, 1.0)
+        left = left + ramp(s - 2.0, 0.10)
+        right = right + ramp(s - 2.6, 0.08)
+    with open(path, "w") as f:
+        f.write("s,left,right\n")
+        for row in zip(s, left, right):
+            f.write("%.3f,%.6e,%.6e\n" % row)
+
+
+def road_text(name, seed, tmp):
+    """The truth's road: section for ROADS[name] and the seed (a deck is written to tmp)."""
+    road, duration = ROADS[name]
+    if "deck" in name:
+        path = os.path.join(tmp, "deck_%d.csv" % seed)
+        deck_profile(path, seed, 120.0 if duration > 5 else 20.0, "bump" in name)
+        return road % path
+    return road % seed if "%d" in road else road
+
+
 def config_text(road, duration, zero, vehicle, mass, position, seed):
+    """vehicle_imu.yaml with a truth: road is the road: section's text."""
     text = open(os.path.join(ROOT, "config", "vehicle_imu.yaml")).read()
     text = text.replace("  zero: tare ", "  zero: %s #" % zero, 1)
     text = text.replace("  samples: 2000 ", "  samples: %d #" % int(200 * duration), 1)
@@ -56,7 +111,7 @@ def config_text(road, duration, zero, vehicle, mass, position, seed):
     end = text.index("  sensor:", start)
     xi_m = (mass / 200.0 - 1.0) / 0.5
     xi_d = (position / 0.762 - 1.0) / 0.25
-    truth = "  road: %s\n  xi: [%.10f, %.10f]\n" % (road % seed if "%d" in road else road, xi_m, xi_d)
+    truth = "  road: %s\n  xi: [%.10f, %.10f]\n" % (road, xi_m, xi_d)
     if vehicle:
         truth += "  vehicle: {%s}\n" % ", ".join("%s: %s" % kv for kv in OFF.items())
     return text[:start] + truth + text[end:]
@@ -88,7 +143,7 @@ def car_config_text(road, duration, zero, vehicle, load, seed, accel_y=True):
     xi = [(mass / 200.0 - 1.0) / 0.5, (x / 1.3 - 1.0) / 0.4, (y / 0.75 - 1.0) / 0.25]
     text += "sampling:\n  samples: %d\n  duration: %.1f\n" % (int(200 * duration), duration)
     text += "truth:\n  xi: [%s]\n" % ", ".join("%.10f" % v for v in xi)
-    text += "  road: %s\n" % (road % seed if "%d" in road else road)
+    text += "  road: %s\n" % road
     floor = "0.03, 0.03, 0.002, 0.002" if accel_y else "0.03, 0.002, 0.002"
     text += "  sensor:\n    noise_floor: [5.0e-4, 5.0e-4, 5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3, 5.0e-3, 5.0e-3, %s]\n" % floor
     if vehicle:
@@ -108,7 +163,13 @@ def main():
                     help="config/full_car_live.yaml made road-free, with IMU channels")
     ap.add_argument("--without-accel-y", action="store_true",
                     help="--full-car: accel_z and the two gyros only")
+    ap.add_argument("--roads", default="",
+                    help="only the roads whose name contains one of these comma-separated words")
     a = ap.parse_args()
+    if a.roads:
+        for name in list(ROADS):
+            if not any(w in name for w in a.roads.split(",")):
+                del ROADS[name]
     if a.model_errors:
         return model_errors(a)
     if a.full_car:
@@ -126,7 +187,7 @@ def main():
                     for vehicle in (False, True):
                         for mass, position in LOADS:
                             for seed in range(1, a.seeds + 1):
-                                d, p = estimate(exe, tmp, config_text(road, duration, zero, vehicle,
+                                d, p = estimate(exe, tmp, config_text(road_text(name, seed, tmp), duration, zero, vehicle,
                                                                       mass, position, seed),
                                                 method, seed)
                                 off = max(abs(p["added_mass"]["mean"] - mass) / p["added_mass"]["stddev"],
@@ -164,7 +225,7 @@ def full_car(a):
                         for load in CAR_LOADS:
                             for seed in range(1, a.seeds + 1):
                                 d, p = estimate(exe, tmp, car_config_text(
-                                    road, duration, zero, vehicle, load, seed,
+                                    road_text(name, seed, tmp), duration, zero, vehicle, load, seed,
                                     not a.without_accel_y), method, seed)
                                 off = max(abs(p[n]["mean"] - v) / p[n]["stddev"]
                                           for n, v in zip(names, load))
@@ -197,7 +258,7 @@ def model_errors(a):
                     for method in a.methods.split(","):
                         flagged = silent = 0
                         for mass, position in LOADS:
-                            text = config_text(road, duration, zero, False, mass, position, 1)
+                            text = config_text(road_text(name, 1, tmp), duration, zero, False, mass, position, 1)
                             text = text.replace("  xi: [", "  vehicle: {%s}\n  xi: [" % vehicle, 1)
                             cfg = os.path.join(tmp, "c.yaml")
                             open(cfg, "w").write(text)
