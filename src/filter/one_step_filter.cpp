@@ -130,6 +130,13 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
     throw std::invalid_argument("relinearize: need 0 <= shrink < 1, width > 0, shrink * width < 1");
   }
   startRelinearization();
+  // The re-open rule's chance rate, simulated once per process: here, before
+  // the first sample, for a sample with every channel of the model.
+  if (settings_.reopen.mode != ReopenMode::kOff) {
+    chanceReopenPerSample(settings_.health.nis_window,
+                          static_cast<int>(propagator_->model().observationMatrix().rows()),
+                          settings_.health.nis_confidence, settings_.reopen.after);
+  }
 }
 
 OneStepFilter::~OneStepFilter() = default;
