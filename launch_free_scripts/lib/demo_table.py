@@ -82,13 +82,18 @@ def main():
     print(f"  replay_node -> estimator_node: {replay_counts}")
     print(f"  parameter_estimate messages: {node['received']} for {n} samples "
           f"({node['distinct_stamps']} distinct stamps)")
-    print(f"  {'parameter':<10}{'truth':>10}{'one-step (node)':>26}{'err/std':>9}"
+    names = list(last or truth)
+    # The vehicle's tolerances (nuisance parameters) have long names and large values.
+    width = max([10] + [len(LABELS.get(name, name)) + 1 for name in names])
+    print(f"  {'parameter':<{width}}{'truth':>14}{'one-step (node)':>26}{'err/std':>9}"
           f"{'ES-MDA batch (node)':>26}{'err/std':>9}")
-    for name in last or truth:
+    for name in names:
         digits = 3 if name == "added_mass" else 6
         t = truth.get(name)
-        print(f"  {LABELS.get(name, name):<10}"
-              f"{(f'{t:.{digits}f}' if t is not None else 'n/a'):>10}"
+        if t is not None and abs(t) >= 1000.0:
+            digits = 1
+        print(f"  {LABELS.get(name, name):<{width}}"
+              f"{(f'{t:.{digits}f}' if t is not None else 'n/a'):>14}"
               f"  {cell(last.get(name), digits)}{error_in_std(last.get(name), t)}"
               f"  {cell(batch.get(name), digits)}{error_in_std(batch.get(name), t)}")
     print(f"  health: one-step {health(node.get('last'))}; batch {health(node.get('batch'))}")
