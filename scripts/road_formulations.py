@@ -421,6 +421,8 @@ FORMULATIONS = [  # name, zeros it applies to, estimator on a record
     ("road as state, class and speed right", ("tare", "rest"), lambda r: road_as_state(r)),
     ("road as state, told class A, 0.8 speed", ("tare", "rest"),
      lambda r: road_as_state(r, "A", 0.8)),
+    ("road as state, right, corner 0.02 c/m", ("tare", "rest"),
+     lambda r: road_as_state(r, corner=N_MIN)),
     ("static only (1 s means of u)", ("tare",), lambda r: static_only(r)),
     ("road given exactly", ("tare", "rest"), lambda r: road_given(r, 1.0)),
     ("road given 3 % high", ("tare", "rest"), lambda r: road_given(r, 1.03)),
@@ -466,7 +468,7 @@ def table_row(road, zero, name, rows):
     soft_z = np.array([r[5] for r in rows])
     soft_flags = np.array([r[6] for r in rows])
     n = len(rows)
-    return ("| %s | %s | %s | %d | %d | %d | %d | %.3g | %.2f | %d | %.0f | %+.1f | %d | %d |" % (
+    return ("| %s | %s | %s | %d | %d | %d | %d | %.3g | %.2f | %d | %.1f | %+.1f | %d | %d |" % (
         road, zero, name, n, (z <= 3).sum(), (z > 3).sum(), ((z > 3) & ~flags).sum(),
         np.median([r[1] for r in rows]), z.mean(), flags.sum(),
         1000.0 * np.median([r[3] for r in rows]), np.median([r[4] for r in rows]),
