@@ -226,9 +226,10 @@ def expm(m):
     return out
 
 
-def road_state_model(m, zero, road_class, speed, corner=0.0, dt=1.0 / RATE, std=STD):
-    """The discrete model of the road as a state, batched over m (G,): F, Q
-    (Van Loan), H, d, R and the stationary covariance P0. The road is
+def road_state_model(m, zero, roughness, speed, corner=0.0, dt=1.0 / RATE, std=STD):
+    """The discrete model of the road as a state, batched over m (G,) and
+    roughness Gd(n0) (scalar or (G,)): F, Q (Van Loan), H, d, R and the
+    stationary covariance P0. The road is
     r' = -2 pi corner V r + w with E[w(t) w(s)] = 2 pi^2 Gd(n0) n0^2 V delta(t - s),
     so r' has the ISO one-sided PSD 4 pi^2 Gd(n0) n0^2 V above `corner`
     (cycles/m). The readings see only relative motion, so the state is
@@ -237,6 +238,7 @@ def road_state_model(m, zero, road_class, speed, corner=0.0, dt=1.0 / RATE, std=
     m = np.atleast_1d(np.asarray(m, float))
     mass = body_mass(m)
     g, n = m.size, (5 if corner > 0.0 else 4)
+    roughness = np.broadcast_to(np.asarray(roughness, float), (g,))
     a = np.zeros((g, n, n))
     # u' = z_b' - z_u';  m z_b'' = -k u - c (z_b' - z_u');
     # m_u z_u'' = k u + c (z_b' - z_u') - k_t (z_u - r);  (z_u - r)' = z_u' - r'
@@ -249,10 +251,10 @@ def road_state_model(m, zero, road_class, speed, corner=0.0, dt=1.0 / RATE, std=
     if corner > 0.0:
         alpha = 2.0 * math.pi * corner * speed
         a[:, 3, 4], a[:, 4, 4], noise[4] = alpha, -alpha, 1.0
-    q = 2.0 * math.pi ** 2 * ROUGHNESS[road_class] * N0 ** 2 * speed
+    q = 2.0 * math.pi ** 2 * roughness * N0 ** 2 * speed
     vl = np.zeros((g, 2 * n, 2 * n))
     vl[:, :n, :n], vl[:, n:, n:] = -a, np.swapaxes(a, 1, 2)
-    vl[:, :n, n:] = q * np.outer(noise, noise)
+    vl[:, :n, n:] = q[:, None, None] * np.outer(noise, noise)
     e = expm(vl * dt)
     f = np.swapaxes(e[:, n:, n:], 1, 2)
     qd = f @ e[:, :n, n:]
@@ -307,23 +309,42 @@ def kalman_loglik(f, h, d, y, gains):
 _GAINS = {}  # the first grid's gains, which every record of a road assumption shares
 
 
-def road_as_state(rec, road_class=None, speed_factor=1.0, corner=0.0):
-    """The road an unknown state; the filter is told a class and a speed."""
-    road_class = road_class or rec.road.road_class
+def fitted_roughness(rec, speed, load, corner=0.0):
+    """The roughness Gd(n0) of largest marginal likelihood at a load: a log
+    grid from a quarter of class A to four times class E, then a parabola in
+    log Gd. With corner 0 the road enters only as Gd V, so this stands in for
+    the class and the speed alike."""
+    gd = ROUGHNESS["A"] * 2.0 ** (np.arange(-4, 21) / 2.0)
+    f, qd, h, d, r, p0 = road_state_model(np.full(gd.size, load), rec.zero, gd, speed, corner,
+                                          std=rec.std)
+    ll, _ = kalman_loglik(f, h, d, rec.y, kalman_gains(f, qd, h, r, p0, rec.y.shape[0]))
+    i = min(max(int(np.argmax(ll)), 1), gd.size - 2)
+    curv = ll[i - 1] - 2.0 * ll[i] + ll[i + 1]
+    shift = 0.5 * (ll[i - 1] - ll[i + 1]) / curv if curv < 0.0 else 0.0
+    return gd[i] * 2.0 ** (0.5 * min(max(shift, -1.0), 1.0))
+
+
+def road_as_state(rec, road_class=None, speed_factor=1.0, corner=0.0, fit=False):
+    """The road an unknown state; the filter is told a class and a speed, or
+    (fit) the roughness is fitted to the record first."""
+    speed = rec.road.speed * speed_factor
+    if fit:  # at the load class C gives (the load barely moves with the class; tare's sag must fit)
+        guess = grid_posterior(road_as_state(rec, "C", speed_factor, corner))[0]
+        roughness = fitted_roughness(rec, speed, guess, corner)
+    else:
+        roughness = ROUGHNESS[road_class or rec.road.road_class]
     y = rec.y
 
-    speed = rec.road.speed * speed_factor
-
     def loglik(m):
-        f, qd, h, d, r, p0 = road_state_model(m, rec.zero, road_class, speed, corner,
+        f, qd, h, d, r, p0 = road_state_model(m, rec.zero, roughness, speed, corner,
                                               std=rec.std)
-        key = (road_class, speed, corner, y.shape[0], tuple(rec.std), m.tobytes())
+        key = (roughness, speed, corner, y.shape[0], tuple(rec.std), m.tobytes())
         gains = _GAINS.get(key)
         if gains is None:
             gains = kalman_gains(f, qd, h, r, p0, y.shape[0])
             if len(_GAINS) > 8:
                 _GAINS.clear()
-            if m[0] == 100.0 and m[-1] == 300.0:
+            if m[0] == 100.0 and m[-1] == 300.0 and not fit:
                 _GAINS[key] = gains
         ll, chi2 = kalman_loglik(f, h, d, y, gains)
         return ll, chi2, y.size
@@ -423,6 +444,7 @@ FORMULATIONS = [  # name, zeros it applies to, estimator on a record
      lambda r: road_as_state(r, "A", 0.8)),
     ("road as state, right, corner 0.02 c/m", ("tare", "rest"),
      lambda r: road_as_state(r, corner=N_MIN)),
+    ("road as state, roughness fitted", ("tare", "rest"), lambda r: road_as_state(r, fit=True)),
     ("static only (1 s means of u)", ("tare",), lambda r: static_only(r)),
     ("road given exactly", ("tare", "rest"), lambda r: road_given(r, 1.0)),
     ("road given 3 % high", ("tare", "rest"), lambda r: road_given(r, 1.03)),

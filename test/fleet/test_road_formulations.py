@@ -65,7 +65,7 @@ def dense_loglik(f, qd, h, d, r, p0, y):
 def test_kalman_innovations_give_the_dense_gaussian_loglik(drive, corner, zero):
     y = drive.with_zero(zero).y[:30]
     m = np.array([230.0, 280.0])
-    f, qd, h, d, r, p0 = rf.road_state_model(m, zero, "C", drive.road.speed, corner)
+    f, qd, h, d, r, p0 = rf.road_state_model(m, zero, rf.ROUGHNESS["C"], drive.road.speed, corner)
     gains = rf.kalman_gains(f, qd, h, r, p0, y.shape[0])
     ll, chi2 = rf.kalman_loglik(f, h, d, y, gains)
     for g in range(m.size):
@@ -78,7 +78,7 @@ def test_kalman_innovations_give_the_dense_gaussian_loglik(drive, corner, zero):
 def test_stationary_covariance_and_road_variance():
     # P0 = F P0 F' + Q, and with a corner the road's variance is q / (2 alpha).
     m = np.array([250.0])
-    f, qd, _, _, _, p0 = rf.road_state_model(m, "rest", "B", 10.0, corner=0.02)
+    f, qd, _, _, _, p0 = rf.road_state_model(m, "rest", 64e-6, 10.0, corner=0.02)
     np.testing.assert_allclose(f[0] @ p0[0] @ f[0].T + qd[0], p0[0], rtol=1e-9, atol=1e-18)
     q = 2.0 * math.pi ** 2 * 64e-6 * 0.01 * 10.0
     assert p0[0, 4, 4] == pytest.approx(q / (2.0 * 2.0 * math.pi * 0.02 * 10.0), rel=1e-9)
@@ -90,7 +90,7 @@ def test_stationary_readings_match_the_road_spectrum(corner):
     # road's one-sided PSD, ISO 8608's Gd(n0) n0^2 V / f^2 flattened below
     # the corner frequency n_c V (a wide corner, so the shaping matters).
     speed, mass = 10.0, 250.0
-    _, _, h, _, _, p0 = rf.road_state_model(np.array([mass]), "rest", "B", speed, corner)
+    _, _, h, _, _, p0 = rf.road_state_model(np.array([mass]), "rest", 64e-6, speed, corner)
     model = np.diag(h[0] @ p0[0] @ h[0].T)
     a, b = rf.quarter_car(np.array([rf.M_BODY + 0.5 * mass]), rf.SPRING)
     freq = np.logspace(-5, 5, 40001)
@@ -101,6 +101,14 @@ def test_stationary_readings_match_the_road_spectrum(corner):
     psd = np.abs(y) ** 2 * road_psd[:, None]
     integral = np.trapz(psd * freq[:, None], np.log(freq), axis=0)
     np.testing.assert_allclose(model, integral, rtol=1e-4)
+
+
+def test_fitted_roughness_finds_the_road_class():
+    # Told nothing about the road, the marginal likelihood finds ISO C's
+    # Gd(n0) = 256e-6 m^3 within 15 %, far from the neighbouring classes (x4).
+    road = rf.Road("C", 54.0, seed=4, seconds=10.0)
+    rec = rf.Record(road, 150.0, seed=4).with_zero("rest")
+    assert rf.fitted_roughness(rec, road.speed, 150.0) / 256e-6 == pytest.approx(1.0, abs=0.15)
 
 
 def test_base_excitation_on_noise_free_inputs_is_least_squares():
