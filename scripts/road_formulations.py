@@ -16,9 +16,10 @@ under its own assumptions:
   base excitation    u, v are inputs: a = (m_b g [tare] - k u - c v) / (m_b + M/2),
                      with or without the inputs' noise in a's variance (errors in
                      variables), and with the travel blended with its rate (tau 0.02 s)
-  road as a state    Kalman filter on [z_b, z_b', z_u, z_u', r], the road a
-                     first-order shaped noise; told the right class and speed, or
-                     class A at 0.8 of the speed
+  road as a state    Kalman filter on [u, z_b', z_u', z_u - r] with the road an
+                     integrated white noise of ISO 8608's intensity (or shaped
+                     with a corner at 0.02 cycles/m); told the right class and
+                     speed, class A at 0.8 of the speed, or its roughness fitted
   static only        (tare) M from the 1 s means of the travel (the load's sag)
   road given         the road told exactly, 3 % high, or flat
 
@@ -119,12 +120,10 @@ class Road:
 
     @property
     def gram(self):
+        """basis basis^T, once per road: every record on it shares it."""
         if self._gram is None:
             self._gram = self.basis @ self.basis.T
         return self._gram
-
-    def heights(self):
-        return self.amp @ self.basis[:self.amp.size]
 
 
 class Record:
@@ -176,9 +175,11 @@ def travel_blend(u, v, tau=BLEND_TAU):
 
 
 def blend_std(su, sv, tau=BLEND_TAU):
+    """The blended travel's noise (docs/method.md §4.10), as if white."""
     dt = 1.0 / RATE
     w = tau / (tau + dt)
-    return math.sqrt((1.0 - w) / (1.0 + w) * su ** 2 + w ** 2 / (1.0 - w ** 2) * dt ** 2 * sv ** 2 / 2.0)
+    return math.sqrt((1.0 - w) / (1.0 + w) * su ** 2
+                     + w ** 2 / (1.0 - w ** 2) * dt ** 2 * sv ** 2 / 2.0)
 
 
 def base_excitation(rec, eiv=True, blend=False):
@@ -208,7 +209,8 @@ def static_only(rec, batches=10):
 
     def loglik(m):
         sag = -0.5 * np.asarray(m, float) * GRAVITY / SPRING
-        return -0.5 * batches * np.log(((means[None, :] - sag[:, None]) ** 2).sum(axis=1)), None, None
+        scatter = ((means[None, :] - sag[:, None]) ** 2).sum(axis=1)
+        return -0.5 * batches * np.log(scatter), None, None
     return loglik
 
 
@@ -400,7 +402,9 @@ def grid_posterior(loglik, lo=100.0, hi=300.0, points=41, depth=30.0, resolved=2
         step = m[1] - m[0]
         new_lo, new_hi = m[inside[0]] - step, m[inside[-1]] + step
         if open_lo or open_hi:  # the peak runs off the grid: widen that side
-            new_lo, new_hi = (lo - (hi - lo) if open_lo else new_lo), (hi + (hi - lo) if open_hi else new_hi)
+            width = hi - lo
+            new_lo = lo - width if open_lo else new_lo
+            new_hi = hi + width if open_hi else new_hi
         else:
             i = int(np.argmax(lp))
             curv = lp[i - 1] - 2.0 * lp[i] + lp[i + 1] if 0 < i < points - 1 else 0.0
@@ -451,9 +455,9 @@ FORMULATIONS = [  # name, zeros it applies to, estimator on a record
     ("road given flat", ("tare", "rest"), lambda r: road_given(r, 0.0)),
 ]
 
-HEADER = ("| road | zero | formulation | runs | covered ≤3σ | off >3σ | silent | median σ_M kg "
-          "| mean abs err/σ | flagged | ms/record | soft k: median shift σ | soft k: flagged "
-          "| soft k: silent |\n|" + "---|" * 14)
+HEADER = ("| road | zero | formulation | runs | covered ≤3σ | off >3σ | silent "
+          "| median σ_M kg | mean abs err/σ | flagged | ms/record | soft k: median shift σ "
+          "| soft k: flagged | soft k: silent |\n|" + "---|" * 14)
 
 
 def estimate(make, rec):
