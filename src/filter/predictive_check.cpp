@@ -53,7 +53,13 @@ PredictiveCheck posteriorPredictiveCheck(const MechanicalModel& model,
       per_sample[k] += r2[row++];
     }
   }
-  for (int c = 0; c < channels; ++c) p.channel_mean[c] = count[c] > 0 ? p.channel_mean[c] / count[c] : 0.0;
+  for (int c = 0; c < channels; ++c) {
+    p.channel_mean[c] = count[c] > 0 ? p.channel_mean[c] / count[c] : 0.0;
+    if (count[c] > 0) {
+      p.channel_names.push_back(model.channelNames()[static_cast<std::size_t>(c)]);
+      p.observed_mean.push_back(p.channel_mean[c]);
+    }
+  }
   // Worst window: a tenth of the record (at least one sample), by mean contribution.
   const int n = static_cast<int>(series.size());
   const int w = std::max(1, n / 10);

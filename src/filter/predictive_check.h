@@ -26,6 +26,8 @@ struct PredictiveCheck {
   double lower = 0.0, upper = 0.0;
   bool outside = false;        // drives health
   Eigen::VectorXd channel_mean;  // per model channel: mean of the normalised squared residuals
+  std::vector<std::string> channel_names;  // the model channels with entries, by name
+  std::vector<double> observed_mean;        // their channel_mean, in that order
   int worst_window_begin = 0, worst_window_end = 0;  // sample indices [begin, end)
   double worst_window_mean = 0.0;
   std::string problem;  // why unavailable

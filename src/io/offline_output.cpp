@@ -121,6 +121,12 @@ std::string toJson(const OfflineResult& r) {
                            {"lower", r.predictive.lower},
                            {"upper", r.predictive.upper},
                            {"outside", r.predictive.outside}};
+  // Each observed channel's mean normalised squared residual (1 under the model).
+  Json per_channel = Json::object();
+  for (std::size_t c = 0; c < r.predictive.channel_names.size(); ++c) {
+    per_channel[r.predictive.channel_names[c]] = r.predictive.observed_mean[c];
+  }
+  j["predictive_check"]["channels"] = per_channel;
   if (!r.sensitivity.parameters.empty()) {
     Json rows = Json::array();
     for (int i : r.sensitivity.ranking()) {

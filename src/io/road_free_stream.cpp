@@ -80,6 +80,10 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     const double high = a * a / (1.0 - a * a) * dt * dt * 0.5 * absolute_[b.v] * absolute_[b.v];
     absolute_[b.u] = std::sqrt(low * absolute_[b.u] * absolute_[b.u] + high);
     relative_[b.u] *= std::sqrt(low);
+    // Its noise is low-passed, so consecutive samples share it: lag-1
+    // correlation a, plus the rate's trapezoid that both samples hold.
+    const double shared = 0.25 * a * a * dt * dt * absolute_[b.v] * absolute_[b.v];
+    inputs_->setNoiseCorrelation(b.u, std::min(0.999, a + shared / (absolute_[b.u] * absolute_[b.u])));
   }
   accel_z_ = type.description().channelIndex("accel_z");
   inherited_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(channels.size()));

@@ -17,6 +17,9 @@ Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k
       before(now0.size()), attitude(static_cast<std::size_t>(std::max(m, 1)));
   std::vector<double> plus(static_cast<std::size_t>(outputs)), minus(plus.size());
   Eigen::VectorXd variance = Eigen::VectorXd::Zero(outputs);
+  // Each input's change of the outputs by its noise at k (row 0) and at k - 1
+  // (row 1): correlated noise (a blended travel) adds 2 rho d_now d_before.
+  Eigen::MatrixXd now_change = Eigen::MatrixXd::Zero(n, outputs), before_change = now_change;
   const bool at_rest = k == 0;
   const double dt = t[k] - (at_rest ? 0.0 : t[k - 1]);
   inputs.at(t[k], now0.data());
@@ -47,7 +50,12 @@ Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k
     for (int r = 0; r < outputs; ++r) {
       const double d = 0.5 * (plus[r] - minus[r]);  // derivative times std
       variance[r] += d * d;
+      if (!angle) (which < n ? now_change : before_change)(i, r) = d;
     }
+  }
+  for (int i = 0; i < n && !at_rest; ++i) {
+    const double rho = inputs.noiseCorrelation(i);
+    if (rho != 0.0) variance += 2.0 * rho * now_change.row(i).cwiseProduct(before_change.row(i)).transpose();
   }
   return variance;
 }

@@ -21,9 +21,9 @@ using ReadingOutputs = std::function<void(const double* now, const double* befor
 // At sample k of `inputs`: each input at k and at k - 1 perturbed by its
 // noise there, hypot(absolute, relative * reading), and each integrated
 // input (e.g. a gyro's angle) by absolute * sqrt(dt * t_k) (the random walk
-// of its integral up to t_k), one at a time (central differences; the noise
-// of "now" and "before" independent). Returns, per output, the sum of the
-// squared changes.
+// of its integral up to t_k), one at a time (central differences). The noise
+// of an input at k and at k - 1 is correlated by inputs.noiseCorrelation
+// (0: independent). Returns, per output, the variance of the summed changes.
 Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k,
                                       const Eigen::VectorXd& absolute,
                                       const Eigen::VectorXd& relative,

@@ -118,4 +118,17 @@ double ReadingInputs::rms(int c) const {
   return std::sqrt(s / static_cast<double>(col.size()));
 }
 
+void ReadingInputs::setNoiseCorrelation(int c, double rho) {
+  if (c < 0 || c >= count() || !(rho > -1.0 && rho < 1.0)) {
+    throw std::invalid_argument("ReadingInputs::setNoiseCorrelation: input " + std::to_string(c) +
+                                ", correlation " + std::to_string(rho) + " outside (-1, 1)");
+  }
+  rho_.resize(names_.size(), 0.0);
+  rho_[static_cast<std::size_t>(c)] = rho;
+}
+
+double ReadingInputs::noiseCorrelation(int c) const {
+  return static_cast<std::size_t>(c) < rho_.size() ? rho_[static_cast<std::size_t>(c)] : 0.0;
+}
+
 }  // namespace pc_ekf

@@ -42,6 +42,11 @@ class ReadingInputs {
   // Mean and RMS of input c over the samples.
   double mean(int c) const;
   double rms(int c) const;
+  // The correlation of input c's noise between consecutive samples (0: white;
+  // a blended travel's is about its blend factor). Errors in variables use it
+  // for an output read from the inputs at a sample and at the one before.
+  void setNoiseCorrelation(int c, double rho);
+  double noiseCorrelation(int c) const;
 
  private:
   std::vector<std::string> names_;
@@ -49,6 +54,7 @@ class ReadingInputs {
   std::vector<std::vector<double>> v_;    // [input][sample], gaps filled
   std::vector<std::vector<double>> cum_;  // [input][sample]: integral up to t_k
   SampledRoad series_;                    // v_ by time, for the interpolation
+  std::vector<double> rho_;               // [input]: lag-1 noise correlation
 };
 
 }  // namespace pc_ekf

@@ -101,6 +101,26 @@ TEST(OfflineJson, EstimateReadsBackAsTheComputedDouble) {
   std::filesystem::remove_all(std::filesystem::path(dir).parent_path().parent_path());
 }
 
+TEST(OfflineJson, PredictiveCheckPerChannelSumsToItsStatistic) {
+  // ES-MDA on the paper's bump: every sample reads u1, u2, v1, v2, so the
+  // channels' mean normalised squared residuals times the samples add up to T.
+  EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml");
+  const auto model = makeModel(c, makeRoad(c));
+  const MeasurementSeries data = synthesizeFromConfig(c, *model, c.truth.seed);
+  const OfflineResult r = runOfflineEstimation(c, data, model, EstimationMethod::kEsMda, 1);
+  const nlohmann::json j = nlohmann::json::parse(toJson(r));
+  const nlohmann::json& channels = j["predictive_check"]["channels"];
+  ASSERT_TRUE(j["predictive_check"]["available"].get<bool>());
+  ASSERT_EQ(channels.size(), 4u);
+  double sum = 0.0;
+  for (const char* name : {"u1", "u2", "v1", "v2"}) {
+    ASSERT_TRUE(channels.contains(name)) << name;
+    sum += channels[name].get<double>() * static_cast<double>(data.size());
+  }
+  EXPECT_NEAR(sum, j["predictive_check"]["statistic"].get<double>(),
+              1e-12 * j["predictive_check"]["statistic"].get<double>());
+}
+
 TEST(OfflineJson, UncreatableDirectoryIsNamed) {
   const std::string file = (std::filesystem::temp_directory_path() /
                             ("pc_ekf_json_file_" + std::to_string(::getpid())))

@@ -9,6 +9,7 @@
 #include <random>
 
 #include "pc_ekf/model/full_car_road_free.h"
+#include "pc_ekf/model/input_noise.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/roll_plane_model.h"
 #include "pc_ekf/model/roll_plane_road_free.h"
@@ -295,6 +296,30 @@ TEST(RollPlaneRoadFree, InputNoiseVarianceMatchesMonteCarlo) {
   }
   EXPECT_NEAR(sum_sq / count / predicted, 1.0, 0.1);
   EXPECT_GT(predicted, 1e-4);  // comparable to a MEMS accelerometer's own noise
+}
+
+// Errors in variables with correlated input noise: an output read from an
+// input at k and at k - 1, y = 2 x_k + 3 x_(k-1), inherits
+// sigma^2 (4 + 9 + 2 rho 6) when the input's noise is correlated rho between
+// consecutive samples (a blended travel), sigma^2 (4 + 9) when it is white.
+TEST(InputNoise, CorrelatedNoiseBetweenConsecutiveSamples) {
+  auto inputs = std::make_shared<ReadingInputs>(std::vector<std::string>{"x"},
+                                                 std::vector<double>{0.1, 0.2, 0.3},
+                                                 std::vector<std::vector<double>>{{1.0, 2.0, 3.0}});
+  const ReadingOutputs linear = [](const double* now, const double* before, bool, double,
+                                   const double*, double* out) {
+    out[0] = 2.0 * now[0] + 3.0 * before[0];
+  };
+  const Eigen::VectorXd absolute = Eigen::VectorXd::Constant(1, 0.5), relative = Eigen::VectorXd::Zero(1);
+  EXPECT_NEAR(inputOutputVarianceAt(*inputs, 1, absolute, relative, {}, 1, linear)[0],
+              0.25 * 13.0, 1e-12);
+  inputs->setNoiseCorrelation(0, 0.8);
+  EXPECT_NEAR(inputOutputVarianceAt(*inputs, 1, absolute, relative, {}, 1, linear)[0],
+              0.25 * (13.0 + 2.0 * 0.8 * 6.0), 1e-12);
+  // The first sample has nothing before it.
+  EXPECT_NEAR(inputOutputVarianceAt(*inputs, 0, absolute, relative, {}, 1, linear)[0], 0.25 * 4.0,
+              1e-12);
+  EXPECT_THROW(inputs->setNoiseCorrelation(0, 1.0), std::invalid_argument);
 }
 
 }  // namespace
