@@ -1,24 +1,18 @@
 // The full-car model's description (docs/method.md §2): its parameter table,
 // settings, channels, contacts and joints, and the binding of each table
-// entry to its FullCarParameters field. The only place that names them.
+// entry to its FullCarFields field. The only place that names them.
 #include <limits>
 #include <stdexcept>
 
+#include "pc_ekf/model/field_table.h"
 #include "pc_ekf/model/full_car_model.h"
 
 namespace pc_ekf {
 namespace {
 
-using Field = double& (*)(FullCarParameters&);
-struct Entry {
-  ParameterSpec spec;
-  Field field;
-};
-#define PC_EKF_FIELD(member) [](FullCarParameters& p) -> double& { return p.member; }
-
 // Unsprung masses, springs and dampers are per axle (both corners alike).
-const std::vector<Entry>& parameterEntries() {
-  static const std::vector<Entry> e = {
+const FieldTable<FullCarFields>& parameterFields() {
+  static const FieldTable<FullCarFields> e({
       {{"body_mass", "kg", 1200.0, positive(), "sprung mass m_s"}, PC_EKF_FIELD(body_mass)},
       {{"roll_inertia", "kg m^2", 400.0, positive(), "roll inertia I_xx about O"},
        PC_EKF_FIELD(roll_inertia)},
@@ -62,42 +56,19 @@ const std::vector<Entry>& parameterEntries() {
        PC_EKF_FIELD(imu_x)},
       {{"imu_y", "m", 0.0, anyValue(), "IMU mount left of the body's centre O (default: at O)"},
        PC_EKF_FIELD(imu_y)},
-  };
+  });
   return e;
 }
 
-const std::vector<Entry>& settingEntries() {
-  static const std::vector<Entry> e = {
+const FieldTable<FullCarFields>& settingFields() {
+  static const FieldTable<FullCarFields> e({
       {{"damper_tanh_scale", "m/s", 1.0, positive(), "tanh damper: F_C = c scale tanh(rate v)"},
        PC_EKF_FIELD(damper_tanh_scale)},
       {{"damper_tanh_rate", "s/m", 1.0, positive(), "tanh damper: rate"},
        PC_EKF_FIELD(damper_tanh_rate)},
-  };
+  });
   return e;
 }
-#undef PC_EKF_FIELD
-
-ParameterTable tableOf(const std::vector<Entry>& entries) {
-  std::vector<ParameterSpec> specs;
-  for (const auto& e : entries) specs.push_back(e.spec);
-  return ParameterTable(std::move(specs));
-}
-
-Eigen::VectorXd read(const std::vector<Entry>& entries, FullCarParameters p) {
-  Eigen::VectorXd v(static_cast<Eigen::Index>(entries.size()));
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    v[static_cast<Eigen::Index>(i)] = entries[i].field(p);
-  }
-  return v;
-}
-
-void write(const std::vector<Entry>& entries, const Eigen::Ref<const Eigen::VectorXd>& v,
-           FullCarParameters& p) {
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    entries[i].field(p) = v[static_cast<Eigen::Index>(i)];
-  }
-}
-
 }  // namespace
 
 const ModelDescription& fullCarDescription() {
@@ -105,8 +76,8 @@ const ModelDescription& fullCarDescription() {
       "full_car",
       "A 7-DOF full car: a rigid body (heave, pitch, roll) on four corners, each an "
       "unsprung mass on a tyre, with an added point mass (docs/method.md §2).",
-      tableOf(parameterEntries()),
-      tableOf(settingEntries()),
+      parameterFields().table(),
+      settingFields().table(),
       {damperChoice()},
       {"z", "theta", "phi", "zu_fl", "zu_fr", "zu_rl", "zu_rr", "zdot", "thetadot", "phidot",
        "zudot_fl", "zudot_fr", "zudot_rl", "zudot_rr"},
@@ -136,12 +107,22 @@ const ModelDescription& fullCarDescription() {
   return d;
 }
 
-FullCarParameters::FullCarParameters() {
-  write(parameterEntries(), fullCarDescription().parameters().defaults(), *this);
-  write(settingEntries(), fullCarDescription().settings().defaults(), *this);
+const FullCarFields<int>& fullCarRows() {
+  static const FullCarFields<int> rows = [] {
+    FullCarFields<int> r;
+    parameterFields().rowsInto(r);
+    settingFields().rowsInto(r);
+    return r;
+  }();
+  return rows;
 }
 
-Eigen::VectorXd FullCarParameters::toVector() const { return read(parameterEntries(), *this); }
+FullCarParameters::FullCarParameters() {
+  parameterFields().write(fullCarDescription().parameters().defaults(), *this);
+  settingFields().write(fullCarDescription().settings().defaults(), *this);
+}
+
+Eigen::VectorXd FullCarParameters::toVector() const { return parameterFields().read(*this); }
 
 FullCarParameters FullCarParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                                 const FullCarParameters& laws) {
@@ -151,13 +132,13 @@ FullCarParameters FullCarParameters::fromVector(const Eigen::Ref<const Eigen::Ve
                                 " values, got " + std::to_string(v.size()));
   }
   FullCarParameters p = laws;
-  write(parameterEntries(), v, p);
+  parameterFields().write(v, p);
   return p;
 }
 
 FullCarParameters FullCarParameters::from(const ModelParameters& m) {
   FullCarParameters p = fromVector(m.values, FullCarParameters());
-  write(settingEntries(), m.settings, p);
+  settingFields().write(m.settings, p);
   p.damper = damperLaw(m.choice(fullCarDescription(), "damper"));
   return p;
 }
@@ -165,7 +146,7 @@ FullCarParameters FullCarParameters::from(const ModelParameters& m) {
 ModelParameters FullCarParameters::toModelParameters() const {
   ModelParameters m;
   m.values = toVector();
-  m.settings = read(settingEntries(), *this);
+  m.settings = settingFields().read(*this);
   m.choices = {damperChoiceName(damper)};
   return m;
 }

@@ -264,29 +264,20 @@ void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, doubl
 
 }  // namespace
 
-FullCarModel::FullCarModel(const FullCarParameters& nominal,
-                           std::shared_ptr<const ContactRoad> road, ReadingSettings readings)
-    : nominal_(nominal),
+FullCarModel::FullCarModel(ModelParameters nominal, std::shared_ptr<const ContactRoad> road,
+                           ReadingSettings readings)
+    : nominal_(FullCarParameters::from(nominal)),
       readings_(readings),
       state_names_(fullCarDescription().stateNames()),
-      nominal_vector_(nominal.toVector()),
+      nominal_vector_(std::move(nominal.values)),
       id_(next_model_id++),
       h_(Eigen::MatrixXd::Zero(12, 14)),
       road_(std::move(road)) {
   // Tare offsets depend on each point's parameters: readings as states.
   if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
-  if (!road_) throw std::invalid_argument("FullCarModel: no road input");
-  if (road_->contactCount() != 4) {
-    throw std::invalid_argument("FullCarModel: the road must have 4 contacts, got " +
-                                std::to_string(road_->contactCount()));
-  }
-  const std::string why = invalidReason(nominal_vector_);
-  if (!why.empty()) throw std::invalid_argument("FullCarModel: nominal parameters: " + why);
-  if (nominal_.damper == DamperLaw::kTanh &&
-      !(std::isfinite(nominal_.damper_tanh_scale) && std::isfinite(nominal_.damper_tanh_rate) &&
-        nominal_.damper_tanh_scale >= 0.0 && nominal_.damper_tanh_rate >= 0.0)) {
-    throw std::invalid_argument("FullCarModel: damper tanh scale and rate must be finite, >= 0");
-  }
+  checkModelOnRoad(*this, road_.get(), "FullCarModel");
+  checkDamperSettings("FullCarModel", nominal_.damper, nominal_.damper_tanh_scale,
+                      nominal_.damper_tanh_rate);
   if (readings_.as_states) {
     for (const std::string& c : fullCarDescription().channelNames()) {
       state_names_.push_back("reading_" + c);

@@ -37,31 +37,40 @@ namespace pc_ekf {
 // channels u_fl .. v_rr, contacts front_left .. rear_right, joints.
 const ModelDescription& fullCarDescription();
 
-// A typed copy of one full-car parameter vector plus the laws. Fields and
-// defaults come from fullCarDescription() (a default FullCarParameters holds
-// the table's defaults). Unsprung masses, springs and dampers are per axle.
-struct FullCarParameters {
+// The full car's fields, declared once over the element type (field_table.h):
+// the parameters, in the order of fullCarDescription()'s table, then the
+// settings. FullCarFields<int>: each field's row in its table. Unsprung
+// masses, springs and dampers are per axle.
+template <class T>
+struct FullCarFields {
+  T body_mass{};            // m_s, kg
+  T roll_inertia{};         // I_xx about O, kg m^2
+  T pitch_inertia{};        // I_yy about O, kg m^2
+  T front_axle_distance{};  // a, O to the front axle, m
+  T rear_axle_distance{};   // b, O to the rear axle, m
+  T track_width{};          // w, m
+  T unsprung_mass[2]{};     // front, rear
+  T spring_linear[2]{};     // N/m
+  T spring_cubic[2]{};      // N/m^3
+  T damping[2]{};           // N s/m
+  T tyre_stiffness{};       // N/m, all four
+  T gravity{};
+  T added_mass{};    // M, kg
+  T added_mass_x{};  // forward of the rear axle, m
+  T added_mass_y{};  // left of the right wheels' line, m
+  T imu_x{}, imu_y{};  // IMU mount relative to O, m
+  // Settings: F_C = c * scale * tanh(rate * v), or F_C = c v.
+  T damper_tanh_scale{};  // m/s
+  T damper_tanh_rate{};   // s/m
+};
+// A parameter's row in the parameter vector, a setting's in the settings.
+const FullCarFields<int>& fullCarRows();
+
+// A typed copy of one full-car parameter vector plus the laws. A default
+// FullCarParameters holds the table's defaults.
+struct FullCarParameters : FullCarFields<double> {
   FullCarParameters();
-  double body_mass{};            // m_s, kg
-  double roll_inertia{};         // I_xx about O, kg m^2
-  double pitch_inertia{};        // I_yy about O, kg m^2
-  double front_axle_distance{};  // a, O to the front axle, m
-  double rear_axle_distance{};   // b, O to the rear axle, m
-  double track_width{};          // w, m
-  double unsprung_mass[2]{};     // front, rear
-  double spring_linear[2]{};     // N/m
-  double spring_cubic[2]{};      // N/m^3
-  double damping[2]{};           // N s/m
-  double tyre_stiffness{};       // N/m, all four
-  double gravity{};
-  double added_mass{};    // M, kg
-  double added_mass_x{};  // forward of the rear axle, m
-  double added_mass_y{};  // left of the right wheels' line, m
-  double imu_x{}, imu_y{};  // IMU mount relative to O, m
-  // Not in the vector: F_C = c * scale * tanh(rate * v), or F_C = c v.
-  DamperLaw damper = DamperLaw::kTanh;
-  double damper_tanh_scale{};  // m/s
-  double damper_tanh_rate{};   // s/m
+  DamperLaw damper = DamperLaw::kTanh;  // not in the vector
 
   double wheelbase() const { return front_axle_distance + rear_axle_distance; }
   // Position of M relative to O.
@@ -108,8 +117,11 @@ class FullCarModel : public MechanicalModel {
  public:
   // road: 4 contacts (front_left, front_right, rear_left, rear_right), else
   // std::invalid_argument.
-  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road,
+  FullCarModel(ModelParameters nominal, std::shared_ptr<const ContactRoad> road,
                ReadingSettings readings = {});
+  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road,
+               ReadingSettings readings = {})
+      : FullCarModel(nominal.toModelParameters(), std::move(road), readings) {}
 
   const ModelDescription& description() const override { return fullCarDescription(); }
   const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
@@ -139,7 +151,7 @@ class FullCarModel : public MechanicalModel {
 
   std::unique_ptr<FullCarReadings> readingConstants(const Eigen::MatrixXd& params) const;
 
-  FullCarParameters nominal_;
+  FullCarParameters nominal_;  // the laws and the nominal geometry of H
   ReadingSettings readings_;
   std::vector<std::string> state_names_;
   Eigen::VectorXd nominal_vector_;

@@ -16,12 +16,12 @@ class FullCarType : public ModelType {
   const ModelDescription& description() const override { return fullCarDescription(); }
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road) const override {
-    return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road));
+    return std::make_shared<FullCarModel>(p, std::move(road));
   }
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road,
                                                const ReadingSettings& readings) const override {
-    return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road), readings);
+    return std::make_shared<FullCarModel>(p, std::move(road), readings);
   }
   std::shared_ptr<const MechanicalModel> buildRoadFree(const ModelParameters& p,
                                                        std::shared_ptr<const ReadingInputs> in,
