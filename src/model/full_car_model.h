@@ -66,6 +66,43 @@ struct FullCarFields {
 // A parameter's row in the parameter vector, a setting's in the settings.
 const FullCarFields<int>& fullCarRows();
 
+// Positions relative to the body's centre O from a (front_axle_distance), b
+// (rear_axle_distance) and w (track_width): those of FullCarParameters and
+// of FullCarColumn.
+namespace full_car_geometry {
+inline double cornerX(int c, double a, double b) { return c < 2 ? a : -b; }
+inline double cornerY(int c, double w) { return c % 2 == 0 ? 0.5 * w : -0.5 * w; }
+inline double addedMassX(double added_mass_x, double b) { return added_mass_x - b; }
+inline double addedMassY(double added_mass_y, double w) { return added_mass_y - 0.5 * w; }
+}  // namespace full_car_geometry
+
+// One point's values where they are, in its column of the parameter matrix
+// (read by fullCarRows()): how the model reads a point, with no typed copy.
+class FullCarColumn {
+ public:
+  explicit FullCarColumn(const double* values) : v_(values), at_(fullCarRows()) {}
+  // A field's value, e.g. p[p.at().spring_linear[0]].
+  double operator[](int row) const { return v_[row]; }
+  const FullCarFields<int>& at() const { return at_; }
+  double addedMassX() const {
+    return full_car_geometry::addedMassX(v_[at_.added_mass_x], v_[at_.rear_axle_distance]);
+  }
+  double addedMassY() const {
+    return full_car_geometry::addedMassY(v_[at_.added_mass_y], v_[at_.track_width]);
+  }
+  double cornerX(int c) const {
+    return full_car_geometry::cornerX(c, v_[at_.front_axle_distance], v_[at_.rear_axle_distance]);
+  }
+  double cornerY(int c) const { return full_car_geometry::cornerY(c, v_[at_.track_width]); }
+  // The body's mass matrix on (z, theta, phi) with M, a point mass at
+  // (x_M, y_M) at the height of O (it moves with z + x_M theta + y_M phi).
+  Eigen::Matrix3d bodyMass() const;
+
+ private:
+  const double* v_;
+  const FullCarFields<int>& at_;
+};
+
 // A typed copy of one full-car parameter vector plus the laws. A default
 // FullCarParameters holds the table's defaults.
 struct FullCarParameters : FullCarFields<double> {
@@ -74,11 +111,13 @@ struct FullCarParameters : FullCarFields<double> {
 
   double wheelbase() const { return front_axle_distance + rear_axle_distance; }
   // Position of M relative to O.
-  double addedMassX() const { return added_mass_x - rear_axle_distance; }
-  double addedMassY() const { return added_mass_y - 0.5 * track_width; }
+  double addedMassX() const { return full_car_geometry::addedMassX(added_mass_x, rear_axle_distance); }
+  double addedMassY() const { return full_car_geometry::addedMassY(added_mass_y, track_width); }
   // Corner c (0 fl, 1 fr, 2 rl, 3 rr) relative to O.
-  double cornerX(int c) const { return c < 2 ? front_axle_distance : -rear_axle_distance; }
-  double cornerY(int c) const { return c % 2 == 0 ? 0.5 * track_width : -0.5 * track_width; }
+  double cornerX(int c) const {
+    return full_car_geometry::cornerX(c, front_axle_distance, rear_axle_distance);
+  }
+  double cornerY(int c) const { return full_car_geometry::cornerY(c, track_width); }
   // Axle (0 front, 1 rear) of corner c.
   static int axle(int c) { return c / 2; }
 
@@ -109,6 +148,7 @@ struct FullCarEquilibrium {
 // Newton from the linear-spring solution; throws std::runtime_error when it
 // fails to converge.
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p);
+FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p);
 std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps);
 
 struct FullCarReadings;
