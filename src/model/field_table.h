@@ -7,10 +7,14 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <stdexcept>
+#include <string>
 #include <utility>
 #include <vector>
 
+#include "pc_ekf/model/model_description.h"
 #include "pc_ekf/model/parameter_table.h"
+#include "pc_ekf/model/suspension_laws.h"
 
 namespace pc_ekf {
 
@@ -54,6 +58,63 @@ class FieldTable {
 
  private:
   std::vector<FieldEntry<Fields>> entries_;
+};
+
+// A built-in's parameter and setting tables, every field's row, and the
+// conversions of its typed copy (Typed: Fields<double> and a `damper` law,
+// the model's one choice) to and from ModelParameters.
+template <template <class> class Fields>
+class ModelFields {
+ public:
+  ModelFields(FieldTable<Fields> parameters, FieldTable<Fields> settings)
+      : parameters_(std::move(parameters)), settings_(std::move(settings)) {
+    parameters_.rowsInto(rows_);
+    settings_.rowsInto(rows_);
+  }
+  const FieldTable<Fields>& parameters() const { return parameters_; }
+  const FieldTable<Fields>& settings() const { return settings_; }
+  // A parameter's row in the parameter vector, a setting's in the settings.
+  const Fields<int>& rows() const { return rows_; }
+
+  // The description's defaults into p's fields.
+  template <class Typed>
+  void setDefaults(const ModelDescription& d, Typed& p) const {
+    parameters_.write(d.parameters().defaults(), p);
+    settings_.write(d.settings().defaults(), p);
+  }
+  // v's values into a copy of `laws` (its settings and damper law are kept);
+  // std::invalid_argument, prefixed by `who`, for a vector of another size.
+  template <class Typed>
+  Typed fromVector(const ModelDescription& d, const Eigen::Ref<const Eigen::VectorXd>& v,
+                   const Typed& laws, const std::string& who) const {
+    const int n = d.parameters().size();
+    if (v.size() != n) {
+      throw std::invalid_argument(who + ": expected " + std::to_string(n) + " values, got " +
+                                  std::to_string(v.size()));
+    }
+    Typed p = laws;
+    parameters_.write(v, p);
+    return p;
+  }
+  template <class Typed>
+  Typed from(const ModelDescription& d, const ModelParameters& m, const std::string& who) const {
+    Typed p = fromVector(d, m.values, Typed(), who);
+    settings_.write(m.settings, p);
+    p.damper = damperLaw(m.choice(d, "damper"));
+    return p;
+  }
+  template <class Typed>
+  ModelParameters toModelParameters(const Typed& p) const {
+    ModelParameters m;
+    m.values = parameters_.read(p);
+    m.settings = settings_.read(p);
+    m.choices = {damperChoiceName(p.damper)};
+    return m;
+  }
+
+ private:
+  FieldTable<Fields> parameters_, settings_;
+  Fields<int> rows_{};
 };
 
 }  // namespace pc_ekf

@@ -11,8 +11,8 @@ namespace pc_ekf {
 namespace {
 
 // Unsprung masses, springs and dampers are per axle (both corners alike).
-const FieldTable<FullCarFields>& parameterFields() {
-  static const FieldTable<FullCarFields> e({
+FieldTable<FullCarFields> parameterFields() {
+  return FieldTable<FullCarFields>({
       {{"body_mass", "kg", 1200.0, positive(), "sprung mass m_s"}, PC_EKF_FIELD(body_mass)},
       {{"roll_inertia", "kg m^2", 400.0, positive(), "roll inertia I_xx about O"},
        PC_EKF_FIELD(roll_inertia)},
@@ -57,18 +57,21 @@ const FieldTable<FullCarFields>& parameterFields() {
       {{"imu_y", "m", 0.0, anyValue(), "IMU mount left of the body's centre O (default: at O)"},
        PC_EKF_FIELD(imu_y)},
   });
-  return e;
 }
 
-const FieldTable<FullCarFields>& settingFields() {
-  static const FieldTable<FullCarFields> e({
+FieldTable<FullCarFields> settingFields() {
+  return FieldTable<FullCarFields>({
       {{"damper_tanh_scale", "m/s", 1.0, positive(), "tanh damper: F_C = c scale tanh(rate v)"},
        PC_EKF_FIELD(damper_tanh_scale)},
       {{"damper_tanh_rate", "s/m", 1.0, positive(), "tanh damper: rate"},
        PC_EKF_FIELD(damper_tanh_rate)},
   });
-  return e;
 }
+const ModelFields<FullCarFields>& fields() {
+  static const ModelFields<FullCarFields> f(parameterFields(), settingFields());
+  return f;
+}
+
 }  // namespace
 
 const ModelDescription& fullCarDescription() {
@@ -76,8 +79,8 @@ const ModelDescription& fullCarDescription() {
       "full_car",
       "A 7-DOF full car: a rigid body (heave, pitch, roll) on four corners, each an "
       "unsprung mass on a tyre, with an added point mass (docs/method.md §2).",
-      parameterFields().table(),
-      settingFields().table(),
+      fields().parameters().table(),
+      fields().settings().table(),
       {damperChoice()},
       {"z", "theta", "phi", "zu_fl", "zu_fr", "zu_rl", "zu_rr", "zdot", "thetadot", "phidot",
        "zudot_fl", "zudot_fr", "zudot_rl", "zudot_rr"},
@@ -107,48 +110,23 @@ const ModelDescription& fullCarDescription() {
   return d;
 }
 
-const FullCarFields<int>& fullCarRows() {
-  static const FullCarFields<int> rows = [] {
-    FullCarFields<int> r;
-    parameterFields().rowsInto(r);
-    settingFields().rowsInto(r);
-    return r;
-  }();
-  return rows;
-}
+const FullCarFields<int>& fullCarRows() { return fields().rows(); }
 
-FullCarParameters::FullCarParameters() {
-  parameterFields().write(fullCarDescription().parameters().defaults(), *this);
-  settingFields().write(fullCarDescription().settings().defaults(), *this);
-}
+FullCarParameters::FullCarParameters() { fields().setDefaults(fullCarDescription(), *this); }
 
-Eigen::VectorXd FullCarParameters::toVector() const { return parameterFields().read(*this); }
+Eigen::VectorXd FullCarParameters::toVector() const { return fields().parameters().read(*this); }
 
 FullCarParameters FullCarParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                                 const FullCarParameters& laws) {
-  const int n = fullCarDescription().parameters().size();
-  if (v.size() != n) {
-    throw std::invalid_argument("FullCarParameters::fromVector: expected " + std::to_string(n) +
-                                " values, got " + std::to_string(v.size()));
-  }
-  FullCarParameters p = laws;
-  parameterFields().write(v, p);
-  return p;
+  return fields().fromVector(fullCarDescription(), v, laws, "FullCarParameters::fromVector");
 }
 
 FullCarParameters FullCarParameters::from(const ModelParameters& m) {
-  FullCarParameters p = fromVector(m.values, FullCarParameters());
-  settingFields().write(m.settings, p);
-  p.damper = damperLaw(m.choice(fullCarDescription(), "damper"));
-  return p;
+  return fields().from<FullCarParameters>(fullCarDescription(), m, "FullCarParameters::from");
 }
 
 ModelParameters FullCarParameters::toModelParameters() const {
-  ModelParameters m;
-  m.values = toVector();
-  m.settings = settingFields().read(*this);
-  m.choices = {damperChoiceName(damper)};
-  return m;
+  return fields().toModelParameters(*this);
 }
 
 const std::vector<std::string>& fullCarParameterNames() {

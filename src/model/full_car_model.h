@@ -111,7 +111,9 @@ struct FullCarParameters : FullCarFields<double> {
 
   double wheelbase() const { return front_axle_distance + rear_axle_distance; }
   // Position of M relative to O.
-  double addedMassX() const { return full_car_geometry::addedMassX(added_mass_x, rear_axle_distance); }
+  double addedMassX() const {
+    return full_car_geometry::addedMassX(added_mass_x, rear_axle_distance);
+  }
   double addedMassY() const { return full_car_geometry::addedMassY(added_mass_y, track_width); }
   // Corner c (0 fl, 1 fr, 2 rl, 3 rr) relative to O.
   double cornerX(int c) const {

@@ -19,8 +19,8 @@ ParameterDomain configuredNonNegative() {
 
 // Strictly positive unless said; the added mass may go negative at a point as
 // long as the total mass and the combined inertia stay positive (model rule).
-const FieldTable<RollPlaneFields>& parameterFields() {
-  static const FieldTable<RollPlaneFields> e({
+FieldTable<RollPlaneFields> parameterFields() {
+  return FieldTable<RollPlaneFields>({
       {{"bar_mass", "kg", 580.0, positive(), "mass m of the bar (body)"}, PC_EKF_FIELD(bar_mass)},
       {{"unsprung_mass_left", "kg", 36.26, positive(), "unsprung mass m_t, left"},
        PC_EKF_FIELD(unsprung_mass[0])},
@@ -59,18 +59,21 @@ const FieldTable<RollPlaneFields>& parameterFields() {
         "bar_length", 0.5},
        PC_EKF_FIELD(imu_position)},
   });
-  return e;
 }
 
-const FieldTable<RollPlaneFields>& settingFields() {
-  static const FieldTable<RollPlaneFields> e({
+FieldTable<RollPlaneFields> settingFields() {
+  return FieldTable<RollPlaneFields>({
       {{"damper_tanh_scale", "m/s", 0.2, positive(), "tanh damper: F_C = c scale tanh(rate v)"},
        PC_EKF_FIELD(damper_tanh_scale)},
       {{"damper_tanh_rate", "s/m", 10.0, positive(), "tanh damper: rate"},
        PC_EKF_FIELD(damper_tanh_rate)},
   });
-  return e;
 }
+const ModelFields<RollPlaneFields>& fields() {
+  static const ModelFields<RollPlaneFields> f(parameterFields(), settingFields());
+  return f;
+}
+
 }  // namespace
 
 const ModelDescription& rollPlaneDescription() {
@@ -78,8 +81,8 @@ const ModelDescription& rollPlaneDescription() {
       "roll_plane",
       "The paper's 4-DOF roll-plane bar on two suspensions, left (1) and right (2) "
       "(docs/method.md §1).",
-      parameterFields().table(),
-      settingFields().table(),
+      fields().parameters().table(),
+      fields().settings().table(),
       {damperChoice()},
       {"x1", "x2", "xr1", "xr2", "x1dot", "x2dot", "xr1dot", "xr2dot"},
       {{"u1", "m", "suspension extension x1 - xr1, left"},
@@ -95,49 +98,23 @@ const ModelDescription& rollPlaneDescription() {
   return d;
 }
 
-const RollPlaneFields<int>& rollPlaneRows() {
-  static const RollPlaneFields<int> rows = [] {
-    RollPlaneFields<int> r;
-    parameterFields().rowsInto(r);
-    settingFields().rowsInto(r);
-    return r;
-  }();
-  return rows;
-}
+const RollPlaneFields<int>& rollPlaneRows() { return fields().rows(); }
 
-VehicleParameters::VehicleParameters() {
-  parameterFields().write(rollPlaneDescription().parameters().defaults(), *this);
-  settingFields().write(rollPlaneDescription().settings().defaults(), *this);
-}
+VehicleParameters::VehicleParameters() { fields().setDefaults(rollPlaneDescription(), *this); }
 
-Eigen::VectorXd VehicleParameters::toVector() const { return parameterFields().read(*this); }
+Eigen::VectorXd VehicleParameters::toVector() const { return fields().parameters().read(*this); }
 
 VehicleParameters VehicleParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                                 const VehicleParameters& laws) {
-  const int n = rollPlaneDescription().parameters().size();
-  if (v.size() != n) {
-    throw std::invalid_argument("VehicleParameters::fromVector: expected " + std::to_string(n) +
-                                " values, got " + std::to_string(v.size()));
-  }
-  VehicleParameters p = laws;  // damper law and tanh constants are not in the vector
-  parameterFields().write(v, p);
-  return p;
+  return fields().fromVector(rollPlaneDescription(), v, laws, "VehicleParameters::fromVector");
 }
 
 VehicleParameters VehicleParameters::from(const ModelParameters& m) {
-  VehicleParameters p;
-  p = fromVector(m.values, p);
-  settingFields().write(m.settings, p);
-  p.damper = damperLaw(m.choice(rollPlaneDescription(), "damper"));
-  return p;
+  return fields().from<VehicleParameters>(rollPlaneDescription(), m, "VehicleParameters::from");
 }
 
 ModelParameters VehicleParameters::toModelParameters() const {
-  ModelParameters m;
-  m.values = toVector();
-  m.settings = settingFields().read(*this);
-  m.choices = {damperChoiceName(damper)};
-  return m;
+  return fields().toModelParameters(*this);
 }
 
 }  // namespace pc_ekf
