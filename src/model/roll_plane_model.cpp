@@ -331,7 +331,7 @@ VehicleParameters RollPlaneModel::nominal() const { return VehicleParameters::fr
 // formula free of overflow (else the detailed check decides).
 std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
   const ParameterTable& table = description().parameters();
-  const RollPlaneFields<int>& at = rollPlaneRows();
+  static const RollPlaneFields<int>& at = rollPlaneRows();  // once: it runs for every point
   if (params.size() == table.size() && table.admissible(params.data())) {
     const double largest = params.cwiseAbs().maxCoeff();
     if ((params[at.added_mass] >= 0.0) & (largest < 1e150)) return "";
