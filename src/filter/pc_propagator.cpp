@@ -37,9 +37,6 @@ PcPropagator::PcPropagator(std::shared_ptr<const MechanicalModel> model,
   if (design_.termCount() != basis_.size()) {
     throw std::invalid_argument("PcPropagator: design and basis sizes differ");
   }
-  for (const UncertainParameter& u : mapping_.uncertain()) {
-    full_index_.push_back(model_->parameterIndex(u.name));  // valid: checked by the mapping
-  }
   int modelled = 0;
   while (modelled < model_->observationMatrix().rows() && model_->channelModelled(modelled)) {
     ++modelled;

@@ -129,7 +129,6 @@ class PcPropagator {
   CollocationDesign design_;
   ParameterMapping mapping_;
   IntegratorSettings settings_;
-  std::vector<int> full_index_;  // model parameter index of each uncertain parameter
   // H's rows of the leading channels the model gives as built (the
   // leave-one-out error's channels; all of them with readings as states).
   Eigen::MatrixXd loo_observation_;

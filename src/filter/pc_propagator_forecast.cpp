@@ -47,18 +47,13 @@ ForecastReport PcPropagator::forecast(Eigen::MatrixXd& x, double t0, double t1) 
   return report;
 }
 
-// (A^T)(l, q) = A[q + l Q]; the full parameters are the nominal values with
-// the uncertain rows replaced.
+// (A^T)(l, q) = A[q + l Q]; the full parameters from the mapping.
 void PcPropagator::evaluatePoints(const Eigen::MatrixXd& x, Eigen::Index begin, Eigen::Index end,
                                   ForecastWork& work) const {
-  const int ns = stateCount(), np = parameterCount();
-  const Eigen::VectorXd& nominal = model_->nominalParameters();
   smallProduct(x.data(), design_.designMatrix().data() + begin, design_.pointCount(), 1,
                &work.at_points(0, begin), x.rows(), x.cols(), end - begin);
-  for (Eigen::Index q = begin; q < end; ++q) {
-    work.params.col(q) = nominal;  // column copies: Eigen's replicate() divides per element
-    for (int i = 0; i < np; ++i) work.params(full_index_[i], q) = work.at_points(ns + i, q);
-  }
+  mapping_.fillFullParameters(work.at_points.bottomRows(parameterCount()), begin, end,
+                              work.params);
 }
 
 // Each column is independent of the others of its batch.

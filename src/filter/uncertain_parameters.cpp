@@ -31,11 +31,18 @@ std::vector<std::string> ParameterMapping::names() const {
 }
 
 Eigen::MatrixXd ParameterMapping::fullParameters(const Eigen::MatrixXd& theta) const {
-  // Column copies rather than replicate(), which divides per element.
   Eigen::MatrixXd full(nominal_full_.size(), theta.cols());
-  for (Eigen::Index q = 0; q < theta.cols(); ++q) full.col(q) = nominal_full_;
-  for (int i = 0; i < count(); ++i) full.row(index_[i]) = theta.row(i);
+  fillFullParameters(theta, 0, theta.cols(), full);
   return full;
+}
+
+void ParameterMapping::fillFullParameters(const Eigen::Ref<const Eigen::MatrixXd>& theta,
+                                          Eigen::Index begin, Eigen::Index end,
+                                          Eigen::MatrixXd& full) const {
+  for (Eigen::Index q = begin; q < end; ++q) {
+    full.col(q) = nominal_full_;  // column copies: Eigen's replicate() divides per element
+    for (int i = 0; i < count(); ++i) full(index_[i], q) = theta(i, q);
+  }
 }
 
 Eigen::MatrixXd ParameterMapping::valuesAtGerms(const Eigen::MatrixXd& xi) const {

@@ -33,6 +33,11 @@ class ParameterMapping {
   // theta (count x Q) -> full model parameters (model parameters x Q), the
   // others at their nominal values.
   Eigen::MatrixXd fullParameters(const Eigen::MatrixXd& theta) const;
+  // The same into columns [begin, end) of `full` (model parameters x Q, sized
+  // by the caller) from those columns of theta: the forecast fills its own
+  // buffer, a part per thread, with no allocation.
+  void fillFullParameters(const Eigen::Ref<const Eigen::MatrixXd>& theta, Eigen::Index begin,
+                          Eigen::Index end, Eigen::MatrixXd& full) const;
   // Parameter values at germ points (rows of xi, Q x count) -> count x Q.
   Eigen::MatrixXd valuesAtGerms(const Eigen::MatrixXd& xi) const;
   // Germ coordinates of parameter values (inverse of the affine map).
@@ -54,7 +59,7 @@ class ParameterMapping {
 
  private:
   Eigen::VectorXd nominal_full_;
-  std::vector<int> index_;
+  std::vector<int> index_;  // row of each uncertain parameter in the full vector
   std::vector<UncertainParameter> uncertain_;
 };
 

@@ -1,24 +1,18 @@
 // The full-car model's description (docs/method.md §2): its parameter table,
 // settings, channels, contacts and joints, and the binding of each table
-// entry to its FullCarParameters field. The only place that names them.
+// entry to its FullCarFields field. The only place that names them.
 #include <limits>
 #include <stdexcept>
 
+#include "pc_ekf/model/field_table.h"
 #include "pc_ekf/model/full_car_model.h"
 
 namespace pc_ekf {
 namespace {
 
-using Field = double& (*)(FullCarParameters&);
-struct Entry {
-  ParameterSpec spec;
-  Field field;
-};
-#define PC_EKF_FIELD(member) [](FullCarParameters& p) -> double& { return p.member; }
-
 // Unsprung masses, springs and dampers are per axle (both corners alike).
-const std::vector<Entry>& parameterEntries() {
-  static const std::vector<Entry> e = {
+FieldTable<FullCarFields> parameterFields() {
+  return FieldTable<FullCarFields>({
       {{"body_mass", "kg", 1200.0, positive(), "sprung mass m_s"}, PC_EKF_FIELD(body_mass)},
       {{"roll_inertia", "kg m^2", 400.0, positive(), "roll inertia I_xx about O"},
        PC_EKF_FIELD(roll_inertia)},
@@ -62,40 +56,20 @@ const std::vector<Entry>& parameterEntries() {
        PC_EKF_FIELD(imu_x)},
       {{"imu_y", "m", 0.0, anyValue(), "IMU mount left of the body's centre O (default: at O)"},
        PC_EKF_FIELD(imu_y)},
-  };
-  return e;
+  });
 }
 
-const std::vector<Entry>& settingEntries() {
-  static const std::vector<Entry> e = {
+FieldTable<FullCarFields> settingFields() {
+  return FieldTable<FullCarFields>({
       {{"damper_tanh_scale", "m/s", 1.0, positive(), "tanh damper: F_C = c scale tanh(rate v)"},
        PC_EKF_FIELD(damper_tanh_scale)},
       {{"damper_tanh_rate", "s/m", 1.0, positive(), "tanh damper: rate"},
        PC_EKF_FIELD(damper_tanh_rate)},
-  };
-  return e;
+  });
 }
-#undef PC_EKF_FIELD
-
-ParameterTable tableOf(const std::vector<Entry>& entries) {
-  std::vector<ParameterSpec> specs;
-  for (const auto& e : entries) specs.push_back(e.spec);
-  return ParameterTable(std::move(specs));
-}
-
-Eigen::VectorXd read(const std::vector<Entry>& entries, FullCarParameters p) {
-  Eigen::VectorXd v(static_cast<Eigen::Index>(entries.size()));
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    v[static_cast<Eigen::Index>(i)] = entries[i].field(p);
-  }
-  return v;
-}
-
-void write(const std::vector<Entry>& entries, const Eigen::Ref<const Eigen::VectorXd>& v,
-           FullCarParameters& p) {
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    entries[i].field(p) = v[static_cast<Eigen::Index>(i)];
-  }
+const ModelFields<FullCarFields>& fields() {
+  static const ModelFields<FullCarFields> f(parameterFields(), settingFields());
+  return f;
 }
 
 }  // namespace
@@ -105,8 +79,8 @@ const ModelDescription& fullCarDescription() {
       "full_car",
       "A 7-DOF full car: a rigid body (heave, pitch, roll) on four corners, each an "
       "unsprung mass on a tyre, with an added point mass (docs/method.md §2).",
-      tableOf(parameterEntries()),
-      tableOf(settingEntries()),
+      fields().parameters().table(),
+      fields().settings().table(),
       {damperChoice()},
       {"z", "theta", "phi", "zu_fl", "zu_fr", "zu_rl", "zu_rr", "zdot", "thetadot", "phidot",
        "zudot_fl", "zudot_fr", "zudot_rl", "zudot_rr"},
@@ -136,38 +110,23 @@ const ModelDescription& fullCarDescription() {
   return d;
 }
 
-FullCarParameters::FullCarParameters() {
-  write(parameterEntries(), fullCarDescription().parameters().defaults(), *this);
-  write(settingEntries(), fullCarDescription().settings().defaults(), *this);
-}
+const FullCarFields<int>& fullCarRows() { return fields().rows(); }
 
-Eigen::VectorXd FullCarParameters::toVector() const { return read(parameterEntries(), *this); }
+FullCarParameters::FullCarParameters() { fields().setDefaults(fullCarDescription(), *this); }
+
+Eigen::VectorXd FullCarParameters::toVector() const { return fields().parameters().read(*this); }
 
 FullCarParameters FullCarParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                                 const FullCarParameters& laws) {
-  const int n = fullCarDescription().parameters().size();
-  if (v.size() != n) {
-    throw std::invalid_argument("FullCarParameters::fromVector: expected " + std::to_string(n) +
-                                " values, got " + std::to_string(v.size()));
-  }
-  FullCarParameters p = laws;
-  write(parameterEntries(), v, p);
-  return p;
+  return fields().fromVector(fullCarDescription(), v, laws, "FullCarParameters::fromVector");
 }
 
 FullCarParameters FullCarParameters::from(const ModelParameters& m) {
-  FullCarParameters p = fromVector(m.values, FullCarParameters());
-  write(settingEntries(), m.settings, p);
-  p.damper = damperLaw(m.choice(fullCarDescription(), "damper"));
-  return p;
+  return fields().from<FullCarParameters>(fullCarDescription(), m, "FullCarParameters::from");
 }
 
 ModelParameters FullCarParameters::toModelParameters() const {
-  ModelParameters m;
-  m.values = toVector();
-  m.settings = read(settingEntries(), *this);
-  m.choices = {damperChoiceName(damper)};
-  return m;
+  return fields().toModelParameters(*this);
 }
 
 const std::vector<std::string>& fullCarParameterNames() {

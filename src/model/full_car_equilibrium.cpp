@@ -22,21 +22,22 @@ struct Setup {
   double body_load[3];  // g [m_s + M, M x_M, M y_M]
 };
 
-Setup setupOf(const FullCarParameters& p) {
+Setup setupOf(const FullCarColumn& p) {
+  const FullCarFields<int>& at = p.at();
   Setup s;
   for (int c = 0; c < 4; ++c) {
     const int axle = FullCarParameters::axle(c);
     s.x[c] = p.cornerX(c);
     s.y[c] = p.cornerY(c);
-    s.k[c] = p.spring_linear[axle];
-    s.k3[c] = p.spring_cubic[axle];
-    s.unsprung_weight[c] = p.unsprung_mass[axle] * p.gravity;
+    s.k[c] = p[at.spring_linear[axle]];
+    s.k3[c] = p[at.spring_cubic[axle]];
+    s.unsprung_weight[c] = p[at.unsprung_mass[axle]] * p[at.gravity];
   }
-  s.tyre = p.tyre_stiffness;
-  const double m = p.added_mass;
-  s.body_load[0] = (p.body_mass + m) * p.gravity;
-  s.body_load[1] = m * p.addedMassX() * p.gravity;
-  s.body_load[2] = m * p.addedMassY() * p.gravity;
+  s.tyre = p[at.tyre_stiffness];
+  const double m = p[at.added_mass], g = p[at.gravity];
+  s.body_load[0] = (p[at.body_mass] + m) * g;
+  s.body_load[1] = m * p.addedMassX() * g;
+  s.body_load[2] = m * p.addedMassY() * g;
   return s;
 }
 
@@ -77,7 +78,7 @@ Vector7 residuals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
   throw std::runtime_error(os.str());
 }
 
-FullCarEquilibrium solve(const FullCarParameters& p) {
+FullCarEquilibrium solve(const FullCarColumn& p) {
   const Setup s = setupOf(p);
   Matrix7 j;
   // Linear springs: R is affine, so one solve from 0 is exact.
@@ -136,12 +137,17 @@ FullCarEquilibrium solve(const FullCarParameters& p) {
 
 }  // namespace
 
-FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p) { return solve(p); }
+FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p) { return solve(p); }
+
+FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p) {
+  const Eigen::VectorXd v = p.toVector();
+  return solve(FullCarColumn(v.data()));
+}
 
 std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps) {
   std::vector<FullCarEquilibrium> out;
   out.reserve(ps.size());
-  for (const FullCarParameters& p : ps) out.push_back(solve(p));
+  for (const FullCarParameters& p : ps) out.push_back(solveFullCarEquilibrium(p));
   return out;
 }
 

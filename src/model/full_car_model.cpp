@@ -232,31 +232,24 @@ class FullCarBatch : public ModelBatch {
   std::unique_ptr<FullCarReadings> r_;  // null: readings not kept as states
 };
 
-void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, double damper_scale,
+void setConstants(const FullCarColumn& p, const FullCarEquilibrium& e, double damper_scale,
                   Eigen::Index q, PointConstants& c) {
   using C = PointConstants;
+  const FullCarFields<int>& at = p.at();
   for (int i = 0; i < 4; ++i) {
     const int axle = FullCarParameters::axle(i);
     const double delta = e.spring_compression[i];
     c(q, C::kX + i) = p.cornerX(i);
     c(q, C::kY + i) = p.cornerY(i);
-    c(q, C::kK + i) = p.spring_linear[axle];
-    c(q, C::kK3 + i) = p.spring_cubic[axle];
+    c(q, C::kK + i) = p[at.spring_linear[axle]];
+    c(q, C::kK3 + i) = p[at.spring_cubic[axle]];
     c(q, C::kThreeDelta + i) = 3.0 * delta;
     c(q, C::kThreeDeltaSq + i) = 3.0 * delta * delta;
-    c(q, C::kDamping + i) = p.damping[axle] * damper_scale;
-    c(q, C::kInvUnsprung + i) = 1.0 / p.unsprung_mass[axle];
+    c(q, C::kDamping + i) = p[at.damping[axle]] * damper_scale;
+    c(q, C::kInvUnsprung + i) = 1.0 / p[at.unsprung_mass[axle]];
   }
-  c(q, C::kTyre) = p.tyre_stiffness;
-  // M is a point mass at (x_M, y_M) at the height of O: it moves with z + x_M theta + y_M phi.
-  const double m = p.added_mass, xm = p.addedMassX(), ym = p.addedMassY();
-  Eigen::Matrix3d mb;
-  // clang-format off
-  mb << p.body_mass + m, m * xm,                        m * ym,
-        m * xm,          p.pitch_inertia + m * xm * xm, m * xm * ym,
-        m * ym,          m * xm * ym,                   p.roll_inertia + m * ym * ym;
-  // clang-format on
-  const Eigen::Matrix3d inv = mb.inverse();
+  c(q, C::kTyre) = p[at.tyre_stiffness];
+  const Eigen::Matrix3d inv = p.bodyMass().inverse();
   for (int r = 0; r < 3; ++r) {
     for (int col = 0; col < 3; ++col) c(q, C::kInvBodyMass + 3 * r + col) = inv(r, col);
   }
@@ -264,29 +257,32 @@ void setConstants(const FullCarParameters& p, const FullCarEquilibrium& e, doubl
 
 }  // namespace
 
-FullCarModel::FullCarModel(const FullCarParameters& nominal,
-                           std::shared_ptr<const ContactRoad> road, ReadingSettings readings)
-    : nominal_(nominal),
+Eigen::Matrix3d FullCarColumn::bodyMass() const {
+  const double m = v_[at_.added_mass], xm = addedMassX(), ym = addedMassY();
+  const double body = v_[at_.body_mass], pitch = v_[at_.pitch_inertia], roll = v_[at_.roll_inertia];
+  Eigen::Matrix3d mb;
+  // clang-format off
+  mb << body + m, m * xm,              m * ym,
+        m * xm,   pitch + m * xm * xm, m * xm * ym,
+        m * ym,   m * xm * ym,         roll + m * ym * ym;
+  // clang-format on
+  return mb;
+}
+
+FullCarModel::FullCarModel(ModelParameters nominal, std::shared_ptr<const ContactRoad> road,
+                           ReadingSettings readings)
+    : nominal_(FullCarParameters::from(nominal)),
       readings_(readings),
       state_names_(fullCarDescription().stateNames()),
-      nominal_vector_(nominal.toVector()),
+      nominal_vector_(std::move(nominal.values)),
       id_(next_model_id++),
       h_(Eigen::MatrixXd::Zero(12, 14)),
       road_(std::move(road)) {
   // Tare offsets depend on each point's parameters: readings as states.
   if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
-  if (!road_) throw std::invalid_argument("FullCarModel: no road input");
-  if (road_->contactCount() != 4) {
-    throw std::invalid_argument("FullCarModel: the road must have 4 contacts, got " +
-                                std::to_string(road_->contactCount()));
-  }
-  const std::string why = invalidReason(nominal_vector_);
-  if (!why.empty()) throw std::invalid_argument("FullCarModel: nominal parameters: " + why);
-  if (nominal_.damper == DamperLaw::kTanh &&
-      !(std::isfinite(nominal_.damper_tanh_scale) && std::isfinite(nominal_.damper_tanh_rate) &&
-        nominal_.damper_tanh_scale >= 0.0 && nominal_.damper_tanh_rate >= 0.0)) {
-    throw std::invalid_argument("FullCarModel: damper tanh scale and rate must be finite, >= 0");
-  }
+  checkModelOnRoad(*this, road_.get(), "FullCarModel");
+  checkDamperSettings("FullCarModel", nominal_.damper, nominal_.damper_tanh_scale,
+                      nominal_.damper_tanh_rate);
   if (readings_.as_states) {
     for (const std::string& c : fullCarDescription().channelNames()) {
       state_names_.push_back("reading_" + c);
@@ -329,7 +325,7 @@ FullCarEquilibrium FullCarModel::equilibrium(const Eigen::Ref<const Eigen::Vecto
     slot.params = params;
     slot.error.clear();
     try {
-      slot.equilibrium = solveFullCarEquilibrium(FullCarParameters::fromVector(params, nominal_));
+      slot.equilibrium = solveFullCarEquilibrium(FullCarColumn(params.data()));
     } catch (const std::runtime_error& e) {
       slot.error = e.what();
     }
@@ -349,7 +345,7 @@ std::unique_ptr<ModelBatch> FullCarModel::prepare(const Eigen::MatrixXd& params)
     const std::string prefix = "FullCarModel::prepare: column " + std::to_string(q) + ": ";
     const std::string why = description().parameters().violation(params.col(q));
     if (!why.empty()) throw std::invalid_argument(prefix + why);
-    const FullCarParameters p = FullCarParameters::fromVector(params.col(q), nominal_);
+    const FullCarColumn p(&params(0, q));
     FullCarEquilibrium e;
     try {
       e = equilibrium(params.col(q));
@@ -375,26 +371,26 @@ std::unique_ptr<FullCarReadings> FullCarModel::readingConstants(const Eigen::Mat
     a->resize(count);
   }
   const bool tare = readings_.zero == ZeroConvention::kTare;
-  const int added_mass = description().parameters().at("added_mass");
+  const FullCarFields<int>& at = fullCarRows();
   for (Eigen::Index q = 0; q < count; ++q) {
-    const FullCarParameters p = FullCarParameters::fromVector(params.col(q), nominal_);
+    const FullCarColumn p(&params(0, q));
     const FullCarEquilibrium e = equilibrium(params.col(q));
     for (int i = 0; i < 4; ++i) {
       r->corner_x(i, q) = p.cornerX(i);
       r->corner_y(i, q) = p.cornerY(i);
     }
-    r->imu_x[q] = p.imu_x;
-    r->imu_y[q] = p.imu_y;
-    r->gravity[q] = p.gravity;
+    r->imu_x[q] = p[at.imu_x];
+    r->imu_y[q] = p[at.imu_y];
+    r->gravity[q] = p[at.gravity];
     r->roll_static[q] = e.roll;
     r->pitch_static[q] = -e.pitch;
-    const double level = p.gravity * std::cos(-e.pitch);
+    const double level = p[at.gravity] * std::cos(-e.pitch);
     r->rest_y[q] = tare ? 0.0 : level * std::sin(e.roll);
     r->rest_z[q] = tare ? 0.0 : level * std::cos(e.roll);
     if (!tare) continue;
     // Zeroed on the empty vehicle: the same vehicle without the load.
     Eigen::VectorXd unloaded = params.col(q);
-    unloaded[added_mass] = 0.0;
+    unloaded[at.added_mass] = 0.0;
     const FullCarEquilibrium empty = equilibrium(unloaded);
     for (int i = 0; i < 4; ++i) {
       r->travel_offset(i, q) = e.spring_compression[i] - empty.spring_compression[i];

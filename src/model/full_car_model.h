@@ -37,39 +37,89 @@ namespace pc_ekf {
 // channels u_fl .. v_rr, contacts front_left .. rear_right, joints.
 const ModelDescription& fullCarDescription();
 
-// A typed copy of one full-car parameter vector plus the laws. Fields and
-// defaults come from fullCarDescription() (a default FullCarParameters holds
-// the table's defaults). Unsprung masses, springs and dampers are per axle.
-struct FullCarParameters {
+// The full car's fields, declared once over the element type (field_table.h):
+// the parameters, in the order of fullCarDescription()'s table, then the
+// settings. FullCarFields<int>: each field's row in its table. Unsprung
+// masses, springs and dampers are per axle.
+template <class T>
+struct FullCarFields {
+  T body_mass{};            // m_s, kg
+  T roll_inertia{};         // I_xx about O, kg m^2
+  T pitch_inertia{};        // I_yy about O, kg m^2
+  T front_axle_distance{};  // a, O to the front axle, m
+  T rear_axle_distance{};   // b, O to the rear axle, m
+  T track_width{};          // w, m
+  T unsprung_mass[2]{};     // front, rear
+  T spring_linear[2]{};     // N/m
+  T spring_cubic[2]{};      // N/m^3
+  T damping[2]{};           // N s/m
+  T tyre_stiffness{};       // N/m, all four
+  T gravity{};
+  T added_mass{};    // M, kg
+  T added_mass_x{};  // forward of the rear axle, m
+  T added_mass_y{};  // left of the right wheels' line, m
+  T imu_x{}, imu_y{};  // IMU mount relative to O, m
+  // Settings: F_C = c * scale * tanh(rate * v), or F_C = c v.
+  T damper_tanh_scale{};  // m/s
+  T damper_tanh_rate{};   // s/m
+};
+// A parameter's row in the parameter vector, a setting's in the settings.
+const FullCarFields<int>& fullCarRows();
+
+// Positions relative to the body's centre O from a (front_axle_distance), b
+// (rear_axle_distance) and w (track_width): those of FullCarParameters and
+// of FullCarColumn.
+namespace full_car_geometry {
+inline double cornerX(int c, double a, double b) { return c < 2 ? a : -b; }
+inline double cornerY(int c, double w) { return c % 2 == 0 ? 0.5 * w : -0.5 * w; }
+inline double addedMassX(double added_mass_x, double b) { return added_mass_x - b; }
+inline double addedMassY(double added_mass_y, double w) { return added_mass_y - 0.5 * w; }
+}  // namespace full_car_geometry
+
+// One point's values where they are, in its column of the parameter matrix
+// (read by fullCarRows()): how the model reads a point, with no typed copy.
+class FullCarColumn {
+ public:
+  explicit FullCarColumn(const double* values) : v_(values), at_(fullCarRows()) {}
+  // A field's value, e.g. p[p.at().spring_linear[0]].
+  double operator[](int row) const { return v_[row]; }
+  const FullCarFields<int>& at() const { return at_; }
+  double addedMassX() const {
+    return full_car_geometry::addedMassX(v_[at_.added_mass_x], v_[at_.rear_axle_distance]);
+  }
+  double addedMassY() const {
+    return full_car_geometry::addedMassY(v_[at_.added_mass_y], v_[at_.track_width]);
+  }
+  double cornerX(int c) const {
+    return full_car_geometry::cornerX(c, v_[at_.front_axle_distance], v_[at_.rear_axle_distance]);
+  }
+  double cornerY(int c) const { return full_car_geometry::cornerY(c, v_[at_.track_width]); }
+  // The body's mass matrix on (z, theta, phi) with M, a point mass at
+  // (x_M, y_M) at the height of O (it moves with z + x_M theta + y_M phi).
+  Eigen::Matrix3d bodyMass() const;
+
+ private:
+  const double* v_;
+  const FullCarFields<int>& at_;
+};
+
+// A typed copy of one full-car parameter vector plus the laws. A default
+// FullCarParameters holds the table's defaults.
+struct FullCarParameters : FullCarFields<double> {
   FullCarParameters();
-  double body_mass{};            // m_s, kg
-  double roll_inertia{};         // I_xx about O, kg m^2
-  double pitch_inertia{};        // I_yy about O, kg m^2
-  double front_axle_distance{};  // a, O to the front axle, m
-  double rear_axle_distance{};   // b, O to the rear axle, m
-  double track_width{};          // w, m
-  double unsprung_mass[2]{};     // front, rear
-  double spring_linear[2]{};     // N/m
-  double spring_cubic[2]{};      // N/m^3
-  double damping[2]{};           // N s/m
-  double tyre_stiffness{};       // N/m, all four
-  double gravity{};
-  double added_mass{};    // M, kg
-  double added_mass_x{};  // forward of the rear axle, m
-  double added_mass_y{};  // left of the right wheels' line, m
-  double imu_x{}, imu_y{};  // IMU mount relative to O, m
-  // Not in the vector: F_C = c * scale * tanh(rate * v), or F_C = c v.
-  DamperLaw damper = DamperLaw::kTanh;
-  double damper_tanh_scale{};  // m/s
-  double damper_tanh_rate{};   // s/m
+  DamperLaw damper = DamperLaw::kTanh;  // not in the vector
 
   double wheelbase() const { return front_axle_distance + rear_axle_distance; }
   // Position of M relative to O.
-  double addedMassX() const { return added_mass_x - rear_axle_distance; }
-  double addedMassY() const { return added_mass_y - 0.5 * track_width; }
+  double addedMassX() const {
+    return full_car_geometry::addedMassX(added_mass_x, rear_axle_distance);
+  }
+  double addedMassY() const { return full_car_geometry::addedMassY(added_mass_y, track_width); }
   // Corner c (0 fl, 1 fr, 2 rl, 3 rr) relative to O.
-  double cornerX(int c) const { return c < 2 ? front_axle_distance : -rear_axle_distance; }
-  double cornerY(int c) const { return c % 2 == 0 ? 0.5 * track_width : -0.5 * track_width; }
+  double cornerX(int c) const {
+    return full_car_geometry::cornerX(c, front_axle_distance, rear_axle_distance);
+  }
+  double cornerY(int c) const { return full_car_geometry::cornerY(c, track_width); }
   // Axle (0 front, 1 rear) of corner c.
   static int axle(int c) { return c / 2; }
 
@@ -100,6 +150,7 @@ struct FullCarEquilibrium {
 // Newton from the linear-spring solution; throws std::runtime_error when it
 // fails to converge.
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p);
+FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p);
 std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps);
 
 struct FullCarReadings;
@@ -108,8 +159,11 @@ class FullCarModel : public MechanicalModel {
  public:
   // road: 4 contacts (front_left, front_right, rear_left, rear_right), else
   // std::invalid_argument.
-  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road,
+  FullCarModel(ModelParameters nominal, std::shared_ptr<const ContactRoad> road,
                ReadingSettings readings = {});
+  FullCarModel(const FullCarParameters& nominal, std::shared_ptr<const ContactRoad> road,
+               ReadingSettings readings = {})
+      : FullCarModel(nominal.toModelParameters(), std::move(road), readings) {}
 
   const ModelDescription& description() const override { return fullCarDescription(); }
   const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
@@ -139,7 +193,7 @@ class FullCarModel : public MechanicalModel {
 
   std::unique_ptr<FullCarReadings> readingConstants(const Eigen::MatrixXd& params) const;
 
-  FullCarParameters nominal_;
+  FullCarParameters nominal_;  // the laws and the nominal geometry of H
   ReadingSettings readings_;
   std::vector<std::string> state_names_;
   Eigen::VectorXd nominal_vector_;

@@ -155,32 +155,31 @@ std::unique_ptr<FullCarRoadFreeConstants> FullCarRoadFreeModel::constants(
     if (!why.empty()) {
       throw std::invalid_argument("road-free full car: column " + std::to_string(q) + ": " + why);
     }
-    const FullCarParameters p = FullCarParameters::fromVector(params.col(q), nominal_);
+    const FullCarColumn p(&params(0, q));
+    const FullCarFields<int>& at = p.at();
     const FullCarEquilibrium e = solveFullCarEquilibrium(p);
     FullCarEquilibrium e0;
     if (tare) {
-      FullCarParameters empty = p;
-      empty.added_mass = 0.0;
-      e0 = solveFullCarEquilibrium(empty);
+      Eigen::VectorXd empty = params.col(q);
+      empty[at.added_mass] = 0.0;
+      e0 = solveFullCarEquilibrium(FullCarColumn(empty.data()));
     }
     FullCarRoadFreeConstants::Point a{};
     for (int i = 0; i < 4; ++i) {
       const int axle = FullCarParameters::axle(i);
       a.x[i] = p.cornerX(i);
       a.y[i] = p.cornerY(i);
-      a.k[i] = p.spring_linear[axle];
-      a.k3[i] = p.spring_cubic[axle];
-      a.damping[i] = p.damping[axle] * scale;
+      a.k[i] = p[at.spring_linear[axle]];
+      a.k3[i] = p[at.spring_cubic[axle]];
+      a.damping[i] = p[at.damping[axle]] * scale;
       a.delta_ref[i] = tare ? e0.spring_compression[i] : e.spring_compression[i];
     }
-    const double m = p.added_mass, xm = p.addedMassX(), ym = p.addedMassY(), g = p.gravity;
-    Eigen::Matrix3d mb;
-    mb << p.body_mass + m, m * xm, m * ym, m * xm, p.pitch_inertia + m * xm * xm, m * xm * ym,
-        m * ym, m * xm * ym, p.roll_inertia + m * ym * ym;
-    a.inv_mass = mb.inverse();
-    a.weight = Eigen::Vector3d((p.body_mass + m) * g, m * xm * g, m * ym * g);
-    a.imu_x = p.imu_x;
-    a.imu_y = p.imu_y;
+    const double m = p[at.added_mass], xm = p.addedMassX(), ym = p.addedMassY(),
+                 g = p[at.gravity];
+    a.inv_mass = p.bodyMass().inverse();
+    a.weight = Eigen::Vector3d((p[at.body_mass] + m) * g, m * xm * g, m * ym * g);
+    a.imu_x = p[at.imu_x];
+    a.imu_y = p[at.imu_y];
     a.roll_static = e.roll;
     a.pitch_static = -e.pitch;
     a.gravity = g;

@@ -16,12 +16,12 @@ class FullCarType : public ModelType {
   const ModelDescription& description() const override { return fullCarDescription(); }
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road) const override {
-    return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road));
+    return std::make_shared<FullCarModel>(p, std::move(road));
   }
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road,
                                                const ReadingSettings& readings) const override {
-    return std::make_shared<FullCarModel>(FullCarParameters::from(p), std::move(road), readings);
+    return std::make_shared<FullCarModel>(p, std::move(road), readings);
   }
   std::shared_ptr<const MechanicalModel> buildRoadFree(const ModelParameters& p,
                                                        std::shared_ptr<const ReadingInputs> in,
@@ -43,19 +43,8 @@ class FullCarType : public ModelType {
   std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
                                                const ModelParameters& p) const override {
     FullCarBumpSettings b;
-    b.speed_kmh = s.speed_kmh;
-    b.height_left = s.height_left;
-    b.height_right = s.height_right;
-    b.ramp_up_length = s.ramp_up_length;
-    b.flat_length = s.flat_length;
-    b.ramp_down_length = s.ramp_down_length;
-    // The right wheels meet the bump delay_fraction of its length later (an
-    // oblique bump: 0.6 m at the default 3 m bump and 0.2).
-    b.right_offset = s.delay_fraction * (s.ramp_up_length + s.flat_length + s.ramp_down_length);
+    b.bump = s;
     b.wheelbase = FullCarParameters::from(p).wheelbase();
-    if (s.start_distance != 0.0) {
-      throw std::invalid_argument("full_car speed bump: road.speed_bump.start_distance must be 0");
-    }
     return std::make_shared<FullCarBumpRoad>(b);
   }
   std::string equilibriumSummary(const ModelParameters& laws,

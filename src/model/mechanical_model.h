@@ -136,4 +136,11 @@ class MechanicalModel {
   int parameterIndex(const std::string& name) const;  // -1 when unknown
 };
 
+// The checks every model on a road makes when it is built (built-in or
+// plugin, so they live here once): a road under the description's contacts,
+// and the nominal vector admissible by the model's invalidReason (as defined
+// by the class under construction). std::invalid_argument prefixed by `who`.
+void checkModelOnRoad(const MechanicalModel& model, const ContactRoad* road,
+                      const std::string& who);
+
 }  // namespace pc_ekf

@@ -78,13 +78,7 @@ inline PointwiseModel::PointwiseModel(const ModelDescription& description, Eigen
       h_(std::move(observation)),
       road_(std::move(road)) {
   const std::string& name = description_.name();
-  const int contacts = static_cast<int>(description_.contactNames().size());
-  if (!road_ || road_->contactCount() != contacts) {
-    throw std::invalid_argument(name + ": a road under " + std::to_string(contacts) +
-                                " contacts expected");
-  }
-  const std::string why = description_.parameters().violation(nominal_);
-  if (!why.empty()) throw std::invalid_argument(name + ": nominal parameters: " + why);
+  checkModelOnRoad(*this, road_.get(), name);
   if (h_.rows() != static_cast<Eigen::Index>(description_.channelNames().size()) ||
       h_.cols() != stateSize()) {
     throw std::invalid_argument(name + ": observation matrix must be channels x states");

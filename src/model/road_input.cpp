@@ -32,17 +32,21 @@ std::string describeTime(const std::string& what, double t) {
 
 }  // namespace
 
-SpeedBumpRoad::SpeedBumpRoad(const SpeedBumpSettings& s) : s_(s) {
+void checkSpeedBump(const SpeedBumpSettings& s, const std::string& who) {
   const double values[] = {s.speed_kmh,   s.height_left,      s.height_right,   s.ramp_up_length,
                            s.flat_length, s.ramp_down_length, s.delay_fraction, s.start_distance};
   for (double v : values) {
-    if (!std::isfinite(v)) throw std::invalid_argument("SpeedBumpRoad: non-finite setting");
+    if (!std::isfinite(v)) throw std::invalid_argument(who + ": non-finite setting");
   }
-  if (s.speed_kmh <= 0.0) throw std::invalid_argument("SpeedBumpRoad: speed_kmh must be > 0");
+  if (s.speed_kmh <= 0.0) throw std::invalid_argument(who + ": speed_kmh must be > 0");
   if (s.ramp_up_length < 0.0 || s.flat_length < 0.0 || s.ramp_down_length < 0.0 ||
       s.delay_fraction < 0.0) {
-    throw std::invalid_argument("SpeedBumpRoad: lengths and delay_fraction must be >= 0");
+    throw std::invalid_argument(who + ": lengths and delay_fraction must be >= 0");
   }
+}
+
+SpeedBumpRoad::SpeedBumpRoad(const SpeedBumpSettings& s) : s_(s) {
+  checkSpeedBump(s, "SpeedBumpRoad");
 }
 
 double unitTrapezoid(double d, double up, double flat, double down) {

@@ -3,6 +3,7 @@
 
 #include <Eigen/Dense>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace pc_ekf {
@@ -39,6 +40,10 @@ struct SpeedBumpSettings {
   double delay_fraction = 0.2;   // of the bump length, for tyre 2
   double start_distance = 0.0;   // m of travel before tyre 1 reaches the bump
 };
+
+// Throws std::invalid_argument, prefixed by `who`, for a non-finite setting,
+// speed_kmh <= 0 or a negative length or delay_fraction.
+void checkSpeedBump(const SpeedBumpSettings& s, const std::string& who);
 
 // Unit-height trapezoid at travel d past its start: ramp up over `up`, flat
 // over `flat`, ramp down over `down`; 0 outside; zero-length ramps are steps.

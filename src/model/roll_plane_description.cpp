@@ -1,20 +1,14 @@
 // The roll-plane model's description (docs/method.md §1): its parameter
 // table, settings, channels, contacts and joints, and the binding of each
-// table entry to its VehicleParameters field. The only place that names them.
+// table entry to its RollPlaneFields field. The only place that names them.
 #include <limits>
 #include <stdexcept>
 
+#include "pc_ekf/model/field_table.h"
 #include "pc_ekf/model/roll_plane_model.h"
 
 namespace pc_ekf {
 namespace {
-
-using Field = double& (*)(VehicleParameters&);
-struct Entry {
-  ParameterSpec spec;
-  Field field;
-};
-#define PC_EKF_FIELD(member) [](VehicleParameters& p) -> double& { return p.member; }
 
 // Any value at a point, >= 0 when configured.
 ParameterDomain configuredNonNegative() {
@@ -25,8 +19,8 @@ ParameterDomain configuredNonNegative() {
 
 // Strictly positive unless said; the added mass may go negative at a point as
 // long as the total mass and the combined inertia stay positive (model rule).
-const std::vector<Entry>& parameterEntries() {
-  static const std::vector<Entry> e = {
+FieldTable<RollPlaneFields> parameterFields() {
+  return FieldTable<RollPlaneFields>({
       {{"bar_mass", "kg", 580.0, positive(), "mass m of the bar (body)"}, PC_EKF_FIELD(bar_mass)},
       {{"unsprung_mass_left", "kg", 36.26, positive(), "unsprung mass m_t, left"},
        PC_EKF_FIELD(unsprung_mass[0])},
@@ -64,40 +58,20 @@ const std::vector<Entry>& parameterEntries() {
         "IMU mount from the left end (not configured: midway between the mounts)",
         "bar_length", 0.5},
        PC_EKF_FIELD(imu_position)},
-  };
-  return e;
+  });
 }
 
-const std::vector<Entry>& settingEntries() {
-  static const std::vector<Entry> e = {
+FieldTable<RollPlaneFields> settingFields() {
+  return FieldTable<RollPlaneFields>({
       {{"damper_tanh_scale", "m/s", 0.2, positive(), "tanh damper: F_C = c scale tanh(rate v)"},
        PC_EKF_FIELD(damper_tanh_scale)},
       {{"damper_tanh_rate", "s/m", 10.0, positive(), "tanh damper: rate"},
        PC_EKF_FIELD(damper_tanh_rate)},
-  };
-  return e;
+  });
 }
-#undef PC_EKF_FIELD
-
-ParameterTable tableOf(const std::vector<Entry>& entries) {
-  std::vector<ParameterSpec> specs;
-  for (const auto& e : entries) specs.push_back(e.spec);
-  return ParameterTable(std::move(specs));
-}
-
-Eigen::VectorXd read(const std::vector<Entry>& entries, VehicleParameters p) {
-  Eigen::VectorXd v(static_cast<Eigen::Index>(entries.size()));
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    v[static_cast<Eigen::Index>(i)] = entries[i].field(p);
-  }
-  return v;
-}
-
-void write(const std::vector<Entry>& entries, const Eigen::Ref<const Eigen::VectorXd>& v,
-           VehicleParameters& p) {
-  for (std::size_t i = 0; i < entries.size(); ++i) {
-    entries[i].field(p) = v[static_cast<Eigen::Index>(i)];
-  }
+const ModelFields<RollPlaneFields>& fields() {
+  static const ModelFields<RollPlaneFields> f(parameterFields(), settingFields());
+  return f;
 }
 
 }  // namespace
@@ -107,8 +81,8 @@ const ModelDescription& rollPlaneDescription() {
       "roll_plane",
       "The paper's 4-DOF roll-plane bar on two suspensions, left (1) and right (2) "
       "(docs/method.md §1).",
-      tableOf(parameterEntries()),
-      tableOf(settingEntries()),
+      fields().parameters().table(),
+      fields().settings().table(),
       {damperChoice()},
       {"x1", "x2", "xr1", "xr2", "x1dot", "x2dot", "xr1dot", "xr2dot"},
       {{"u1", "m", "suspension extension x1 - xr1, left"},
@@ -124,39 +98,23 @@ const ModelDescription& rollPlaneDescription() {
   return d;
 }
 
-VehicleParameters::VehicleParameters() {
-  write(parameterEntries(), rollPlaneDescription().parameters().defaults(), *this);
-  write(settingEntries(), rollPlaneDescription().settings().defaults(), *this);
-}
+const RollPlaneFields<int>& rollPlaneRows() { return fields().rows(); }
 
-Eigen::VectorXd VehicleParameters::toVector() const { return read(parameterEntries(), *this); }
+VehicleParameters::VehicleParameters() { fields().setDefaults(rollPlaneDescription(), *this); }
+
+Eigen::VectorXd VehicleParameters::toVector() const { return fields().parameters().read(*this); }
 
 VehicleParameters VehicleParameters::fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
                                                 const VehicleParameters& laws) {
-  const int n = rollPlaneDescription().parameters().size();
-  if (v.size() != n) {
-    throw std::invalid_argument("VehicleParameters::fromVector: expected " + std::to_string(n) +
-                                " values, got " + std::to_string(v.size()));
-  }
-  VehicleParameters p = laws;  // damper law and tanh constants are not in the vector
-  write(parameterEntries(), v, p);
-  return p;
+  return fields().fromVector(rollPlaneDescription(), v, laws, "VehicleParameters::fromVector");
 }
 
 VehicleParameters VehicleParameters::from(const ModelParameters& m) {
-  VehicleParameters p;
-  p = fromVector(m.values, p);
-  write(settingEntries(), m.settings, p);
-  p.damper = damperLaw(m.choice(rollPlaneDescription(), "damper"));
-  return p;
+  return fields().from<VehicleParameters>(rollPlaneDescription(), m, "VehicleParameters::from");
 }
 
 ModelParameters VehicleParameters::toModelParameters() const {
-  ModelParameters m;
-  m.values = toVector();
-  m.settings = read(settingEntries(), *this);
-  m.choices = {damperChoiceName(damper)};
-  return m;
+  return fields().toModelParameters(*this);
 }
 
 }  // namespace pc_ekf

@@ -290,28 +290,20 @@ class RollPlaneBatch : public ModelBatch {
 
 }  // namespace
 
-RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
-                               std::shared_ptr<const ContactRoad> road, ReadingSettings readings)
-    : nominal_(nominal),
+RollPlaneModel::RollPlaneModel(ModelParameters nominal, std::shared_ptr<const ContactRoad> road,
+                               ReadingSettings readings)
+    : nominal_(std::move(nominal)),
+      damper_(damperLaw(nominal_.choice(rollPlaneDescription(), "damper"))),
+      tanh_scale_(nominal_.settings[rollPlaneRows().damper_tanh_scale]),
+      tanh_rate_(nominal_.settings[rollPlaneRows().damper_tanh_rate]),
       readings_(readings),
       state_names_(rollPlaneDescription().stateNames()),
-      nominal_vector_(nominal.toVector()),
       h_(Eigen::MatrixXd::Zero(7, 8)),
       road_(std::move(road)) {
   // Tare offsets depend on each point's parameters: readings as states.
   if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
-  if (!road_) throw std::invalid_argument("RollPlaneModel: no road input");
-  if (road_->contactCount() != 2) {
-    throw std::invalid_argument("RollPlaneModel: a road under two contacts expected, got " +
-                                std::to_string(road_->contactCount()));
-  }
-  const std::string why = invalidReason(nominal_vector_);
-  if (!why.empty()) throw std::invalid_argument("RollPlaneModel: nominal parameters: " + why);
-  if (nominal_.damper == DamperLaw::kTanh &&
-      !(std::isfinite(nominal_.damper_tanh_scale) && std::isfinite(nominal_.damper_tanh_rate) &&
-        nominal_.damper_tanh_scale >= 0.0 && nominal_.damper_tanh_rate >= 0.0)) {
-    throw std::invalid_argument("RollPlaneModel: damper tanh scale and rate must be finite, >= 0");
-  }
+  checkModelOnRoad(*this, road_.get(), "RollPlaneModel");
+  checkDamperSettings("RollPlaneModel", damper_, tanh_scale_, tanh_rate_);
   if (readings_.as_states) {
     // Each channel's reading is a state row after the dynamic ones.
     for (const std::string& c : rollPlaneDescription().channelNames()) {
@@ -331,100 +323,78 @@ RollPlaneModel::RollPlaneModel(const VehicleParameters& nominal,
   }
 }
 
-namespace {
+VehicleParameters RollPlaneModel::nominal() const { return VehicleParameters::from(nominal_); }
 
 // The model's rule across entries, beyond the table's domains: a point's
 // added mass may be negative while the total mass and the inertia about the
 // combined centre stay positive. Magnitudes below 1e150 keep the inertia
 // formula free of overflow (else the detailed check decides).
-struct AddedMassRule {
-  int bar_mass, bar_length, bar_inertia, added_mass, position;
-  // Each field's index in the table, found by writing 1..n into a copy
-  // (no second name list).
-  AddedMassRule() {
-    const int n = rollPlaneDescription().parameters().size();
-    const VehicleParameters mark =
-        VehicleParameters::fromVector(Eigen::VectorXd::LinSpaced(n, 1.0, n), VehicleParameters());
-    bar_mass = static_cast<int>(mark.bar_mass) - 1;
-    bar_length = static_cast<int>(mark.bar_length) - 1;
-    bar_inertia = static_cast<int>(mark.bar_inertia) - 1;
-    added_mass = static_cast<int>(mark.added_mass) - 1;
-    position = static_cast<int>(mark.added_mass_position) - 1;
-  }
-};
-
-const AddedMassRule& rule() {
-  static const AddedMassRule r;
-  return r;
-}
-
-}  // namespace
-
 std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
   const ParameterTable& table = description().parameters();
-  const AddedMassRule& r = rule();
+  static const RollPlaneFields<int>& at = rollPlaneRows();  // once: it runs for every point
   if (params.size() == table.size() && table.admissible(params.data())) {
     const double largest = params.cwiseAbs().maxCoeff();
-    if ((params[r.added_mass] >= 0.0) & (largest < 1e150)) return "";
+    if ((params[at.added_mass] >= 0.0) & (largest < 1e150)) return "";
   }
   const std::string why = table.violation(params);
   if (!why.empty()) return why;
   const auto& names = table.names();
-  const double m = params[r.bar_mass], length = params[r.bar_length], mass = params[r.added_mass],
-               pos = params[r.position];
+  const double m = params[at.bar_mass], length = params[at.bar_length],
+               mass = params[at.added_mass], pos = params[at.added_mass_position];
   if (mass + m <= 0.0) {
-    return outOfDomain(names[r.added_mass], mass,
+    return outOfDomain(names[at.added_mass], mass,
                        "makes the total mass <= 0 (bar_mass = " + domainNumber(m) + ")");
   }
   // A negative added mass can still make the combined inertia non-positive.
   const double cg = (mass * pos + m * 0.5 * length) / (mass + m);
-  const double inertia = params[r.bar_inertia] + m * (0.5 * length - cg) * (0.5 * length - cg) +
+  const double inertia = params[at.bar_inertia] + m * (0.5 * length - cg) * (0.5 * length - cg) +
                          mass * (cg - pos) * (cg - pos);
   if (!(inertia > 0.0)) {
-    return outOfDomain(names[r.added_mass], mass,
+    return outOfDomain(names[at.added_mass], mass,
                        "makes the inertia about the combined centre <= 0");
   }
   return "";
 }
 
+// Each point's values are read by row from its column of params (no copy).
 std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& params) const {
-  if (params.rows() != nominal_vector_.size()) {
+  if (params.rows() != nominal_.values.size()) {
     throw std::invalid_argument("RollPlaneModel::prepare: expected " +
-                                std::to_string(nominal_vector_.size()) + " parameter rows");
+                                std::to_string(nominal_.values.size()) + " parameter rows");
   }
   const int count = static_cast<int>(params.cols());
-  std::vector<VehicleParameters> points;
-  points.reserve(count);
   for (int q = 0; q < count; ++q) {
     const std::string why = invalidReason(params.col(q));
     if (!why.empty()) {
       throw std::invalid_argument("RollPlaneModel::prepare: column " + std::to_string(q) + ": " +
                                   why);
     }
-    points.push_back(VehicleParameters::fromVector(params.col(q), nominal_));
   }
-  const std::vector<StaticEquilibrium> equilibria = solveStaticEquilibria(points);
+  const std::vector<StaticEquilibrium> equilibria = solveStaticEquilibria(params);
+  const RollPlaneFields<int>& at = rollPlaneRows();
   PointConstants c(count);
   using C = PointConstants;
-  const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
+  const double scale = damper_ == DamperLaw::kTanh ? tanh_scale_ : 1.0;
   for (int q = 0; q < count; ++q) {
-    const VehicleParameters& p = points[q];
+    const double* p = &params(0, q);
     const StaticEquilibrium& e = equilibria[q];
-    const double length = p.bar_length, cg = e.combined_cg, total = p.bar_mass + p.added_mass;
+    const double length = p[at.bar_length], cg = e.combined_cg,
+                 total = p[at.bar_mass] + p[at.added_mass];
     for (int i = 0; i < 2; ++i) {
       const double delta = e.spring_compression[i];
-      c(q, C::kK + i) = p.spring_linear[i];
-      c(q, C::kK3 + i) = p.spring_cubic[i];
+      c(q, C::kK + i) = p[at.spring_linear[i]];
+      c(q, C::kK3 + i) = p[at.spring_cubic[i]];
       c(q, C::kThreeDelta + i) = 3.0 * delta;
       c(q, C::kThreeDeltaSq + i) = 3.0 * delta * delta;
-      c(q, C::kDamping + i) = p.damping[i] * scale;
-      c(q, C::kTyre + i) = p.tyre_stiffness[i];
-      c(q, C::kInvUnsprung + i) = 1.0 / p.unsprung_mass[i];
+      c(q, C::kDamping + i) = p[at.damping[i]] * scale;
+      c(q, C::kTyre + i) = p[at.tyre_stiffness[i]];
+      c(q, C::kInvUnsprung + i) = 1.0 / p[at.unsprung_mass[i]];
     }
     // I_cg = I + m (L/2 - D)^2 + M (D - d_CG)^2 (docs/method.md §1.4).
-    const double inertia =
-        p.bar_inertia + p.bar_mass * (0.5 * length - cg) * (0.5 * length - cg) +
-        p.added_mass * (cg - p.added_mass_position) * (cg - p.added_mass_position);
+    const double position = p[at.added_mass_position];
+    const double inertia = p[at.bar_inertia] +
+                           p[at.bar_mass] * (0.5 * length - cg) * (0.5 * length - cg) +
+                           p[at.added_mass] * (cg - position) * (cg - position);
     c(q, C::kInvTotalMass) = 1.0 / total;
     c(q, C::kRollGain) = length / inertia;
     c(q, C::kCg) = cg;
@@ -439,15 +409,14 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
     c(q, C::kSinStatic) = slope * cos_static;
   }
   std::unique_ptr<RollPlaneReadings> r;
-  if (readings_.as_states) r = readingConstants(points, equilibria);
-  return std::make_unique<RollPlaneBatch>(std::move(c), nominal_.damper, nominal_.damper_tanh_rate,
-                                          road_, std::move(r));
+  if (readings_.as_states) r = readingConstants(params, equilibria);
+  return std::make_unique<RollPlaneBatch>(std::move(c), damper_, tanh_rate_, road_, std::move(r));
 }
 
 std::unique_ptr<RollPlaneReadings> RollPlaneModel::readingConstants(
-    const std::vector<VehicleParameters>& points,
-    const std::vector<StaticEquilibrium>& equilibria) const {
-  const Eigen::Index count = static_cast<Eigen::Index>(points.size());
+    const Eigen::MatrixXd& params, const std::vector<StaticEquilibrium>& equilibria) const {
+  const Eigen::Index count = params.cols();
+  const RollPlaneFields<int>& at = rollPlaneRows();
   auto r = std::make_unique<RollPlaneReadings>();
   r->imu_fraction.resize(count);
   r->inv_length.resize(count);
@@ -460,19 +429,19 @@ std::unique_ptr<RollPlaneReadings> RollPlaneModel::readingConstants(
   std::vector<StaticEquilibrium> empty;
   if (tare) {
     // The sensors were zeroed on the empty vehicle: the same vehicle, no load.
-    std::vector<VehicleParameters> unloaded = points;
-    for (VehicleParameters& p : unloaded) p.added_mass = 0.0;
+    Eigen::MatrixXd unloaded = params;
+    unloaded.row(at.added_mass).setZero();
     empty = solveStaticEquilibria(unloaded);
   }
   for (Eigen::Index q = 0; q < count; ++q) {
-    const VehicleParameters& p = points[static_cast<std::size_t>(q)];
+    const double* p = &params(0, q);
     const StaticEquilibrium& e = equilibria[static_cast<std::size_t>(q)];
-    r->imu_fraction[q] = p.imu_position / p.bar_length;
-    r->inv_length[q] = 1.0 / p.bar_length;
-    r->gravity[q] = p.gravity;
+    r->imu_fraction[q] = p[at.imu_position] / p[at.bar_length];
+    r->inv_length[q] = 1.0 / p[at.bar_length];
+    r->gravity[q] = p[at.gravity];
     r->roll_static[q] = -e.roll_angle;
-    r->rest_y[q] = tare ? 0.0 : p.gravity * std::sin(-e.roll_angle);
-    r->rest_z[q] = tare ? 0.0 : p.gravity * std::cos(-e.roll_angle);
+    r->rest_y[q] = tare ? 0.0 : p[at.gravity] * std::sin(-e.roll_angle);
+    r->rest_z[q] = tare ? 0.0 : p[at.gravity] * std::cos(-e.roll_angle);
     for (int i = 0; i < 2 && tare; ++i) {
       // Extension positive: the load's extra compression reads negative.
       r->travel_offset(i, q) = e.spring_compression[i] -

@@ -23,27 +23,38 @@ namespace pc_ekf {
 // defaults, domains), settings, channels u1 u2 v1 v2, contacts, joints.
 const ModelDescription& rollPlaneDescription();
 
+// The roll plane's fields, declared once over the element type (field_table.h):
+// the parameters, in the order of rollPlaneDescription()'s table, then the
+// settings. RollPlaneFields<int>: each field's row in its table.
+template <class T>
+struct RollPlaneFields {
+  T bar_mass{};
+  T unsprung_mass[2]{};
+  T damping[2]{};
+  T spring_linear[2]{};
+  T spring_cubic[2]{};
+  T bar_length{};
+  T bar_inertia{};
+  T tyre_stiffness[2]{};
+  T gravity{};
+  T added_mass{};
+  T added_mass_position{};
+  T imu_position{};  // from the left end
+  // Settings.
+  T damper_tanh_scale{};  // F_C = c * scale * tanh(rate * v)
+  T damper_tanh_rate{};
+};
+// Where prepare() and the model's rules read each value: a parameter's row
+// in the parameter vector, a setting's in the settings.
+const RollPlaneFields<int>& rollPlaneRows();
+
 // A typed copy of one roll-plane parameter vector plus the laws, for the
-// static equilibrium and for tests. Field order and defaults come from
-// rollPlaneDescription(): a default VehicleParameters holds the table's
-// defaults.
-struct VehicleParameters {
+// static equilibrium summary and for tests (the model itself reads its
+// parameter matrix by rollPlaneRows()). A default VehicleParameters holds the
+// table's defaults.
+struct VehicleParameters : RollPlaneFields<double> {
   VehicleParameters();
-  double bar_mass{};
-  double unsprung_mass[2]{};
-  double damping[2]{};
-  double spring_linear[2]{};
-  double spring_cubic[2]{};
-  double bar_length{};
-  double bar_inertia{};
-  double tyre_stiffness[2]{};
-  double gravity{};
-  double added_mass{};
-  double added_mass_position{};
-  double imu_position{};  // from the left end
   DamperLaw damper = DamperLaw::kTanh;
-  double damper_tanh_scale{};  // F_C = c * scale * tanh(rate * v)
-  double damper_tanh_rate{};
 
   Eigen::VectorXd toVector() const;
   static VehicleParameters fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
@@ -62,20 +73,25 @@ struct StaticEquilibrium {
 };
 // Newton on the cubic spring law; throws std::runtime_error if it fails to converge.
 StaticEquilibrium solveStaticEquilibrium(const VehicleParameters& p);
-// The same for many parameter sets at once (each result identical to the single
-// solve; the Newton iterations of all springs advance together, which is faster).
-std::vector<StaticEquilibrium> solveStaticEquilibria(const std::vector<VehicleParameters>& ps);
+// The same for many parameter vectors at once, the columns of `params` (each
+// result identical to the single solve; the Newton iterations of all springs
+// advance together, which is faster).
+std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& params);
 
 struct RollPlaneReadings;
 
 class RollPlaneModel : public MechanicalModel {
  public:
-  // road: two contacts (left, right), else std::invalid_argument.
-  RollPlaneModel(const VehicleParameters& nominal, std::shared_ptr<const ContactRoad> road,
+  // road: two contacts (left, right), else std::invalid_argument. nominal:
+  // the parameter vector, settings and damper choice of the description.
+  RollPlaneModel(ModelParameters nominal, std::shared_ptr<const ContactRoad> road,
                  ReadingSettings readings = {});
+  RollPlaneModel(const VehicleParameters& nominal, std::shared_ptr<const ContactRoad> road,
+                 ReadingSettings readings = {})
+      : RollPlaneModel(nominal.toModelParameters(), std::move(road), readings) {}
 
   const ModelDescription& description() const override { return rollPlaneDescription(); }
-  const Eigen::VectorXd& nominalParameters() const override { return nominal_vector_; }
+  const Eigen::VectorXd& nominalParameters() const override { return nominal_.values; }
   std::string invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const override;
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
@@ -89,19 +105,19 @@ class RollPlaneModel : public MechanicalModel {
   ZeroConvention zero() const override { return readings_.zero; }
   static constexpr int kSuspensionChannels = 4;
 
-  const VehicleParameters& nominal() const { return nominal_; }
+  VehicleParameters nominal() const;  // a typed copy
   const ContactRoad& road() const { return *road_; }
   const ContactRoad* contactRoad() const override { return road_.get(); }
 
  private:
   std::unique_ptr<RollPlaneReadings> readingConstants(
-      const std::vector<VehicleParameters>& points,
-      const std::vector<StaticEquilibrium>& equilibria) const;
+      const Eigen::MatrixXd& params, const std::vector<StaticEquilibrium>& equilibria) const;
 
-  VehicleParameters nominal_;
+  ModelParameters nominal_;  // values: the nominal parameter vector
+  DamperLaw damper_;
+  double tanh_scale_, tanh_rate_;
   ReadingSettings readings_;
   std::vector<std::string> state_names_;
-  Eigen::VectorXd nominal_vector_;
   Eigen::MatrixXd h_;
   std::shared_ptr<const ContactRoad> road_;
 };

@@ -136,42 +136,46 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
   c->law = nominal_.damper;
   c->tanh_rate = nominal_.damper_tanh_rate;
   const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
-  std::vector<VehicleParameters> points, empty;
   for (Eigen::Index q = 0; q < params.cols(); ++q) {
     const std::string why = invalidReason(params.col(q));
     if (!why.empty()) {
       throw std::invalid_argument("road-free roll plane: column " + std::to_string(q) + ": " + why);
     }
-    points.push_back(VehicleParameters::fromVector(params.col(q), nominal_));
-    empty.push_back(points.back());
-    empty.back().added_mass = 0.0;
   }
-  const std::vector<StaticEquilibrium> loaded = solveStaticEquilibria(points);
+  const RollPlaneFields<int>& at = rollPlaneRows();
+  const std::vector<StaticEquilibrium> loaded = solveStaticEquilibria(params);
   const bool tare = zero_ == ZeroConvention::kTare;
   std::vector<StaticEquilibrium> unloaded;
-  if (tare) unloaded = solveStaticEquilibria(empty);
-  for (std::size_t q = 0; q < points.size(); ++q) {
-    const VehicleParameters& p = points[q];
-    const StaticEquilibrium& e = loaded[q];
+  if (tare) {
+    Eigen::MatrixXd empty = params;
+    empty.row(at.added_mass).setZero();
+    unloaded = solveStaticEquilibria(empty);
+  }
+  for (Eigen::Index q = 0; q < params.cols(); ++q) {
+    const double* p = &params(0, q);
+    const StaticEquilibrium& e = loaded[static_cast<std::size_t>(q)];
     RoadFreeConstants::Point a{};
-    const double total = p.bar_mass + p.added_mass, cg = e.combined_cg, L = p.bar_length;
+    const double total = p[at.bar_mass] + p[at.added_mass], cg = e.combined_cg,
+                 L = p[at.bar_length];
     for (int i = 0; i < 2; ++i) {
-      a.k[i] = p.spring_linear[i];
-      a.k3[i] = p.spring_cubic[i];
-      a.damping[i] = p.damping[i] * scale;
-      a.delta_ref[i] = tare ? unloaded[q].spring_compression[i] : e.spring_compression[i];
+      a.k[i] = p[at.spring_linear[i]];
+      a.k3[i] = p[at.spring_cubic[i]];
+      a.damping[i] = p[at.damping[i]] * scale;
+      a.delta_ref[i] = tare ? unloaded[static_cast<std::size_t>(q)].spring_compression[i]
+                            : e.spring_compression[i];
     }
-    const double inertia = p.bar_inertia + p.bar_mass * (0.5 * L - cg) * (0.5 * L - cg) +
-                           p.added_mass * (cg - p.added_mass_position) * (cg - p.added_mass_position);
+    const double position = p[at.added_mass_position];
+    const double inertia = p[at.bar_inertia] + p[at.bar_mass] * (0.5 * L - cg) * (0.5 * L - cg) +
+                           p[at.added_mass] * (cg - position) * (cg - position);
     a.inv_total = 1.0 / total;
     a.inv_inertia = 1.0 / inertia;
     a.cg = cg;
     a.rear_arm = L - cg;
-    a.imu_arm = p.imu_position - cg;
+    a.imu_arm = p[at.imu_position] - cg;
     a.roll_static = -e.roll_angle;
-    a.gravity = p.gravity;
-    a.rest_y = tare ? 0.0 : p.gravity * std::sin(a.roll_static);
-    a.rest_z = tare ? 0.0 : p.gravity * std::cos(a.roll_static);
+    a.gravity = p[at.gravity];
+    a.rest_y = tare ? 0.0 : p[at.gravity] * std::sin(a.roll_static);
+    a.rest_z = tare ? 0.0 : p[at.gravity] * std::cos(a.roll_static);
     c->points.push_back(a);
   }
   return c;

@@ -15,12 +15,12 @@ class RollPlaneType : public ModelType {
   const ModelDescription& description() const override { return rollPlaneDescription(); }
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road) const override {
-    return std::make_shared<RollPlaneModel>(VehicleParameters::from(p), std::move(road));
+    return std::make_shared<RollPlaneModel>(p, std::move(road));
   }
   std::shared_ptr<const MechanicalModel> build(const ModelParameters& p,
                                                std::shared_ptr<const ContactRoad> road,
                                                const ReadingSettings& readings) const override {
-    return std::make_shared<RollPlaneModel>(VehicleParameters::from(p), std::move(road), readings);
+    return std::make_shared<RollPlaneModel>(p, std::move(road), readings);
   }
   std::shared_ptr<const MechanicalModel> buildRoadFree(const ModelParameters& p,
                                                        std::shared_ptr<const ReadingInputs> in,

@@ -71,36 +71,39 @@ void springCompressions(const double* k, const double* k3, const double* w, doub
 
 }  // namespace
 
-std::vector<StaticEquilibrium> solveStaticEquilibria(const std::vector<VehicleParameters>& ps) {
-  const std::size_t n = ps.size();
+std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& params) {
+  const RollPlaneFields<int>& at = rollPlaneRows();
+  const std::size_t n = static_cast<std::size_t>(params.cols());
   std::vector<StaticEquilibrium> es(n);
   std::vector<double> k(2 * n), k3(2 * n), w(2 * n), d(2 * n);
   for (std::size_t j = 0; j < n; ++j) {
-    const VehicleParameters& p = ps[j];
+    const double* p = &params(0, static_cast<Eigen::Index>(j));
     StaticEquilibrium& e = es[j];
-    const double total = p.bar_mass + p.added_mass;
-    const double length = p.bar_length;
-    e.combined_cg = (p.added_mass * p.added_mass_position + p.bar_mass * 0.5 * length) / total;
-    const double weight = total * p.gravity;
+    const double total = p[at.bar_mass] + p[at.added_mass];
+    const double length = p[at.bar_length];
+    e.combined_cg =
+        (p[at.added_mass] * p[at.added_mass_position] + p[at.bar_mass] * 0.5 * length) / total;
+    const double weight = total * p[at.gravity];
     // W_1 from (L - D) rather than weight - W_2: same value, exactly symmetric at D = L/2.
     e.load[0] = weight * (length - e.combined_cg) / length;
     e.load[1] = weight * e.combined_cg / length;
     for (int i = 0; i < 2; ++i) {
-      k[2 * j + i] = p.spring_linear[i];
-      k3[2 * j + i] = p.spring_cubic[i];
+      k[2 * j + i] = p[at.spring_linear[i]];
+      k3[2 * j + i] = p[at.spring_cubic[i]];
       w[2 * j + i] = e.load[i];
     }
   }
   springCompressions(k.data(), k3.data(), w.data(), d.data(), 2 * n);
   for (std::size_t j = 0; j < n; ++j) {
-    const VehicleParameters& p = ps[j];
+    const double* p = &params(0, static_cast<Eigen::Index>(j));
     StaticEquilibrium& e = es[j];
     for (int i = 0; i < 2; ++i) {
       e.spring_compression[i] = d[2 * j + i];
-      const double tyre = (e.load[i] + p.unsprung_mass[i] * p.gravity) / p.tyre_stiffness[i];
+      const double tyre =
+          (e.load[i] + p[at.unsprung_mass[i]] * p[at.gravity]) / p[at.tyre_stiffness[i]];
       e.height[i] = -(e.spring_compression[i] + tyre);
     }
-    e.roll_angle = std::atan((e.height[1] - e.height[0]) / p.bar_length);
+    e.roll_angle = std::atan((e.height[1] - e.height[0]) / p[at.bar_length]);
     if (!std::isfinite(e.roll_angle)) {
       throw std::runtime_error("static equilibrium: non-finite roll angle");
     }
@@ -109,7 +112,7 @@ std::vector<StaticEquilibrium> solveStaticEquilibria(const std::vector<VehiclePa
 }
 
 StaticEquilibrium solveStaticEquilibrium(const VehicleParameters& p) {
-  return solveStaticEquilibria({p}).front();
+  return solveStaticEquilibria(p.toVector()).front();
 }
 
 }  // namespace pc_ekf

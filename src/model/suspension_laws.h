@@ -31,6 +31,10 @@ inline double springIncrement(double u, double k, double k3, double three_delta,
 ChoiceSpec damperChoice();
 DamperLaw damperLaw(const std::string& choice);  // "tanh" | "linear", else invalid_argument
 std::string damperChoiceName(DamperLaw law);
+// A built vehicle's tanh constants must be finite and >= 0 (std::invalid_argument
+// prefixed by `who`); the linear law ignores them.
+void checkDamperSettings(const std::string& who, DamperLaw law, double tanh_scale,
+                         double tanh_rate);
 
 // Per-point constants: one Q x columns table, one contiguous column per
 // quantity (structure of arrays over the Q points), so a loop over the points

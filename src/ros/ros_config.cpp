@@ -2,26 +2,16 @@
 
 #include <ros/param.h>
 
-#include <cstdio>
 #include <fstream>
 #include <sstream>
 
 #include "pc_ekf/io/checkpoint.h"
+#include "pc_ekf/io/number_text.h"
 #include "pc_ekf/io/vehicle_file.h"
 #include "pc_ekf/ros/model_plugins.h"
 
 namespace pc_ekf {
 namespace {
-
-// Shortest decimal text that parses back to the same double.
-std::string exactText(double v) {
-  char buffer[40];
-  for (int digits = 15; digits <= 17; ++digits) {
-    std::snprintf(buffer, sizeof(buffer), "%.*g", digits, v);
-    if (std::strtod(buffer, nullptr) == v) break;
-  }
-  return buffer;
-}
 
 YAML::Node loadYamlFile(const std::string& path) {
   std::ifstream in(path);
@@ -46,7 +36,7 @@ YAML::Node yamlFromXmlRpc(const XmlRpc::XmlRpcValue& value) {
     case XmlRpc::XmlRpcValue::TypeInt:
       return YAML::Node(std::to_string(static_cast<int>(v)));
     case XmlRpc::XmlRpcValue::TypeDouble:
-      return YAML::Node(exactText(static_cast<double>(v)));
+      return YAML::Node(roundTripText(static_cast<double>(v)));  // reads back bit for bit
     case XmlRpc::XmlRpcValue::TypeString:
       return YAML::Node(static_cast<std::string>(v));
     case XmlRpc::XmlRpcValue::TypeArray: {

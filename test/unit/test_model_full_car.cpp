@@ -265,7 +265,7 @@ Eigen::MatrixXd offCentreColumns() {
 
 TEST(FullCarDynamics, FlatRoadKeepsEquilibriumExactly) {
   FullCarBumpSettings flat;
-  flat.height_left = flat.height_right = 0.0;  // kinks still there, heights zero
+  flat.bump.height_left = flat.bump.height_right = 0.0;  // kinks still there, heights zero
   const FullCarModel model(truth(), bumpRoad(flat));
   Eigen::ArrayXXd y;
   const Eigen::MatrixXd z = sampledChannels(model, offCentreColumns(), IntegratorSettings(), &y);
@@ -426,8 +426,8 @@ TEST(FullCarLinearVariant, MatchesMatrixExponentialAtTruth) {
 
 TEST(FullCarDynamics, CentredMassOnSymmetricBumpNeverRolls) {
   FullCarBumpSettings s;
-  s.height_left = s.height_right = 0.1;
-  s.right_offset = 0.0;
+  s.bump.height_left = s.bump.height_right = 0.1;
+  s.bump.delay_fraction = 0.0;
   const FullCarModel model(FullCarParameters(), bumpRoad(s));
   Eigen::MatrixXd params(21, 2);
   FullCarParameters p;
@@ -464,8 +464,8 @@ TEST(FullCarDynamics, MirroredMassMirrorsTheResponse) {
   // M at y and at w - y on a road mirrored left/right: roll and the left/right
   // states swap sign and place.
   FullCarBumpSettings s;
-  s.right_offset = 0.0;
-  s.height_left = s.height_right = 0.08;
+  s.bump.delay_fraction = 0.0;
+  s.bump.height_left = s.bump.height_right = 0.08;
   const FullCarModel model(FullCarParameters(), bumpRoad(s));
   Eigen::MatrixXd params(21, 2);
   FullCarParameters p = truth();
@@ -610,7 +610,7 @@ TEST(FullCarBumpRoad, HeightsAndKinks) {
   ASSERT_EQ(inside.size(), 1u);
   EXPECT_NEAR(inside[0] * kSpeed, 1.6, 1e-14);
   FullCarBumpSettings bad;
-  bad.speed_kmh = 0.0;
+  bad.bump.speed_kmh = 0.0;
   EXPECT_THROW(FullCarBumpRoad{bad}, std::invalid_argument);
   bad = FullCarBumpSettings();
   bad.wheelbase = -1.0;
