@@ -132,11 +132,20 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
   startRelinearization();
   // The re-open rule's chance rate, simulated once per process: here, before
   // the first sample, for a sample with every channel of the model.
-  if (settings_.reopen.mode != ReopenMode::kOff) {
-    chanceReopenPerSample(settings_.health.nis_window,
-                          static_cast<int>(propagator_->model().observationMatrix().rows()),
-                          settings_.health.nis_confidence, settings_.reopen.after);
+  reopenChance(static_cast<int>(propagator_->model().observationMatrix().rows()));
+}
+
+double OneStepFilter::reopenChance(int dof) {
+  if (settings_.reopen.mode == ReopenMode::kOff || dof < 1) return 0.0;
+  if (dof >= static_cast<int>(reopen_chance_.size())) {
+    reopen_chance_.resize(static_cast<std::size_t>(dof) + 1, -1.0);
   }
+  double& p = reopen_chance_[static_cast<std::size_t>(dof)];
+  if (p < 0.0) {
+    p = chanceReopenPerSample(settings_.health.nis_window, dof, settings_.health.nis_confidence,
+                              settings_.reopen.after);
+  }
+  return p;
 }
 
 OneStepFilter::~OneStepFilter() = default;
@@ -421,12 +430,8 @@ StepResult OneStepFilter::step(const Measurement& m) {
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
   // The rule's chance re-opens at this sample's dof: a correct model at a
   // high sampling rate re-opens now and then, and that is no misfit.
-  const double chance =
-      settings_.reopen.mode == ReopenMode::kOff || r.update.channels < 1
-          ? 0.0
-          : chanceReopenPerSample(settings_.health.nis_window, r.update.channels,
-                                  settings_.health.nis_confidence, settings_.reopen.after);
-  r.health.rates = rates_.add(r.time, r.gated, r.health.damped, r.reopened, support, chance);
+  r.health.rates = rates_.add(r.time, r.gated, r.health.damped, r.reopened, support,
+                              reopenChance(r.update.channels));
   return r;
 }
 

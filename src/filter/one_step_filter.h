@@ -138,6 +138,10 @@ class OneStepFilter {
   // prior (relinearize.prior_correction); empty when it is the prior itself.
   Eigen::MatrixXd working_theta_;
   Eigen::MatrixXd prior_theta_;  // the prior's parameter coefficients (report's reference)
+  // The re-open rule's chance per sample by dof (-1: not yet simulated; 0
+  // with re-opens off): looked up once per channel count, not per sample.
+  double reopenChance(int dof);
+  std::vector<double> reopen_chance_;
   StepResult processSample(const Measurement& m);
   int restarts_ = 0;
   std::unique_ptr<DeferredRerun> rerun_;  // a deferred re-run under way
