@@ -11,7 +11,8 @@ namespace pc_ekf {
 
 StackedObservations forecastRecord(const PcPropagator& propagator,
                                    const Eigen::MatrixXd& theta_coeffs,
-                                   const MeasurementSeries& series, ForecastReport* report) {
+                                   const MeasurementSeries& series, const NoiseModel& noise,
+                                   ForecastReport* report) {
   const int q = propagator.design().pointCount();
   report->points = q;
   std::vector<std::string> reasons;
@@ -53,6 +54,18 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
     }
   }
   out.z_coeffs = propagator.project(values, usable, report);
+  out.variances = noise.stackedVariances(series);
+  row = 0;
+  for (const Measurement& m : series) {
+    const Eigen::Index k = m.values.size();
+    const NoiseWhitening white(noise, m);
+    if (white.active()) {
+      white.whiten(out.z.segment(row, k));
+      white.whiten(out.z_coeffs.middleRows(row, k));
+      out.variances.segment(row, k).setOnes();
+    }
+    row += k;
+  }
   return out;
 }
 
@@ -66,14 +79,14 @@ BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries&
       start.size() > 0 ? start : propagator.priorState().bottomRows(propagator.parameterCount());
   for (std::size_t i = 0; i < alphas.size(); ++i) {
     ForecastReport report;
-    const StackedObservations obs = forecastRecord(propagator, theta, series, &report);
+    const StackedObservations obs = forecastRecord(propagator, theta, series, noise, &report);
     result.forecast.merge(report);
     result.observations = static_cast<int>(obs.z.size());
     if (!report.ok) {
       result.finite = false;
       break;
     }
-    const Eigen::VectorXd r = alphas[i] * noise.stackedVariances(series);
+    const Eigen::VectorXd r = alphas[i] * obs.variances;
     const Eigen::MatrixXd before = theta;
     const UpdateDiagnostics d = pcKalmanUpdate(theta, obs.z_coeffs, obs.z, r, rule);
     if (support == SupportRule::kDamp && d.finite) {

@@ -27,14 +27,18 @@ struct BatchResult {
 };
 
 // Stacked observation coefficients (observations x S) of the parameter
-// expansion theta_coeffs over the record, and the stacked data.
+// expansion theta_coeffs over the record, the stacked data and R's diagonal;
+// a sample with noise correlated between its channels whitened
+// (NoiseWhitening: its rows and data by L^-1, its variances 1).
 struct StackedObservations {
   Eigen::MatrixXd z_coeffs;
   Eigen::VectorXd z;
+  Eigen::VectorXd variances;
 };
 StackedObservations forecastRecord(const PcPropagator& propagator,
                                    const Eigen::MatrixXd& theta_coeffs,
-                                   const MeasurementSeries& series, ForecastReport* report);
+                                   const MeasurementSeries& series, const NoiseModel& noise,
+                                   ForecastReport* report);
 
 // alphas = {1} is the paper's single whole-set update; ES-MDA uses
 // sum(1/alpha_i) = 1 (default four times 4). R_i = alpha_i R.

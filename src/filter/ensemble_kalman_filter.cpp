@@ -77,10 +77,17 @@ EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
       x.col(i) << states_.col(cols[i]).matrix(), theta_.col(cols[i]);
     }
     for (Eigen::Index c = 0; c < k; ++c) h.row(c) = model_->observationMatrix().row(m.channels[c]);
-    const Eigen::MatrixXd hx = h * x.topRows(ns);
+    Eigen::MatrixXd hx = h * x.topRows(ns);
+    // Noise correlated between channels: the update on whitened readings.
+    const NoiseWhitening white(settings_.noise, m);
+    Eigen::VectorXd z = m.values, r = settings_.noise.variances(m);
+    if (white.active()) {
+      white.whiten(hx);
+      white.whiten(z);
+      r.setOnes();
+    }
     const Eigen::VectorXd xm = x.rowwise().mean(), zm = hx.rowwise().mean();
     const Eigen::MatrixXd a = x.colwise() - xm, y = hx.colwise() - zm;
-    const Eigen::VectorXd r = settings_.noise.variances(m);
     const double scale = std::sqrt(double(ne - 1));
     if (settings_.square_root) {
       // Mean and scaled anomalies play the role of PC coefficients.
@@ -88,7 +95,7 @@ EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
       w << xm, a / scale;
       Eigen::MatrixXd wz(k, ne + 1);
       wz << zm, y / scale;
-      const UpdateDiagnostics d = pcKalmanUpdate(w, wz, m.values, r, UpdateRule::kSquareRoot);
+      const UpdateDiagnostics d = pcKalmanUpdate(w, wz, z, r, UpdateRule::kSquareRoot);
       s.innovation = d.innovation;
       s.nis = d.nis;
       x = (w.rightCols(ne) * scale).colwise() + w.col(0);
@@ -97,12 +104,12 @@ EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
           y * y.transpose() / double(ne - 1) + Eigen::MatrixXd(r.asDiagonal());
       const Eigen::LDLT<Eigen::MatrixXd> ldlt(pzz);
       const Eigen::MatrixXd gain = ldlt.solve(y * a.transpose() / double(ne - 1)).transpose();
-      s.innovation = m.values - zm;
+      s.innovation = z - zm;
       s.nis = s.innovation.dot(ldlt.solve(s.innovation));
       std::normal_distribution<double> normal;
       const Eigen::VectorXd sd = r.cwiseSqrt();
       for (Eigen::Index i = 0; i < ne; ++i) {
-        Eigen::VectorXd perturbed = m.values;
+        Eigen::VectorXd perturbed = z;
         for (Eigen::Index c = 0; c < k; ++c) perturbed[c] += sd[c] * normal(rng_);
         x.col(i) += gain * (perturbed - hx.col(i));
       }

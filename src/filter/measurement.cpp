@@ -39,15 +39,32 @@ Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
       if (std::isfinite(m.variances[i])) v[i] = m.variances[i] + relative[i];
     }
   }
-  if (m.extra_variances.size() != 0) {
-    if (m.extra_variances.size() != m.values.size()) {
-      throw std::invalid_argument("noise: " + std::to_string(m.extra_variances.size()) +
-                                  " inherited variances for " + std::to_string(m.values.size()) +
+  if (m.extra_covariance.size() != 0) {
+    if (m.extra_covariance.rows() != m.values.size() || m.extra_covariance.cols() != m.values.size()) {
+      throw std::invalid_argument("noise: a " + std::to_string(m.extra_covariance.rows()) + " x " +
+                                  std::to_string(m.extra_covariance.cols()) +
+                                  " inherited covariance for " + std::to_string(m.values.size()) +
                                   " values");
     }
-    v += m.extra_variances;
+    v += m.extra_covariance.diagonal();
   }
   return v;
+}
+
+NoiseWhitening::NoiseWhitening(const NoiseModel& noise, const Measurement& m) {
+  const Eigen::Index k = m.values.size();
+  if (m.extra_covariance.size() == 0 || k < 2) return;
+  Eigen::MatrixXd r = m.extra_covariance;
+  r.diagonal().setZero();
+  if (r.isZero(0.0)) return;
+  r.diagonal() = noise.variances(m);
+  const Eigen::LLT<Eigen::MatrixXd> llt(r);
+  if (llt.info() != Eigen::Success) {
+    throw std::invalid_argument("noise: the readings' covariance at t = " + std::to_string(m.time) +
+                                " s is not positive definite");
+  }
+  l_ = llt.matrixL();
+  active_ = true;
 }
 
 Eigen::VectorXd NoiseModel::stackedVariances(const std::vector<Measurement>& series) const {
@@ -73,7 +90,7 @@ Measurement onlyChannels(const Measurement& m, const std::vector<int>& keep) {
   }
   kept.values = m.values(rows);
   if (m.variances.size() != 0) kept.variances = m.variances(rows);
-  if (m.extra_variances.size() != 0) kept.extra_variances = m.extra_variances(rows);
+  if (m.extra_covariance.size() != 0) kept.extra_covariance = m.extra_covariance(rows, rows);
   return kept;
 }
 

@@ -16,9 +16,10 @@ struct Measurement {
   // NoiseModel's rule). Where given, R_jj = variance + (r_relative_c z_j)^2.
   // (Initialised here so that Measurement{t, channels, values} stays warning-free.)
   Eigen::VectorXd variances{};
-  // Optional, per value: added to R_jj, what the reading inherits from the
-  // noise of readings used as inputs (road-free, errors in variables).
-  Eigen::VectorXd extra_variances{};
+  // Optional (values x values): added to R, what the readings inherit from
+  // the noise of readings used as inputs (road-free, errors in variables).
+  // Off its diagonal it correlates this sample's readings (NoiseWhitening).
+  Eigen::MatrixXd extra_covariance{};
 };
 
 using MeasurementSeries = std::vector<Measurement>;
@@ -43,9 +44,31 @@ struct NoiseModel {
   // One r_relative per model channel (empty: r_relative for every channel):
   // an IMU's noise does not grow with the 9.81 of gravity in its reading.
   Eigen::VectorXd channel_relative;
+  // R's diagonal (extra_covariance's included).
   Eigen::VectorXd variances(const Measurement& m) const;
   // Over a whole record, stacked in sample order.
   Eigen::VectorXd stackedVariances(const std::vector<Measurement>& series) const;
+};
+
+// One sample's readings whose noise is correlated between channels
+// (extra_covariance off its diagonal): R = L L' (Cholesky), and whiten()
+// replaces rows (values, or predictions, one row per reading) by L^-1 rows.
+// Whitened, the readings have independent unit noise, and a Kalman update,
+// NIS or likelihood on them equals the one with the full R; the filters
+// whiten such samples and take R = I there. Inactive when R is diagonal
+// (nothing to do: the filters keep the diagonal R).
+class NoiseWhitening {
+ public:
+  NoiseWhitening(const NoiseModel& noise, const Measurement& m);
+  bool active() const { return active_; }
+  template <class Rows>
+  void whiten(const Eigen::MatrixBase<Rows>& rows) const {
+    l_.triangularView<Eigen::Lower>().solveInPlace(rows);
+  }
+
+ private:
+  Eigen::MatrixXd l_;
+  bool active_ = false;
 };
 
 // The series with only the channels in `keep` (ascending model indices);

@@ -32,7 +32,11 @@ Eigen::MatrixXd whitenedResiduals(const MeasurementSeries& series, const NoiseMo
   Eigen::Index row = 0;
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Measurement& m = series[k];
-    const Eigen::VectorXd scale = noise.variances(m).cwiseSqrt().cwiseInverse();
+    const NoiseWhitening white(noise, m);
+    const Eigen::VectorXd scale = white.active()
+                                      ? Eigen::VectorXd(Eigen::VectorXd::Ones(m.values.size()))
+                                      : Eigen::VectorXd(noise.variances(m).cwiseSqrt().cwiseInverse());
+    const Eigen::Index first = row;
     for (std::size_t c = 0; c < m.channels.size(); ++c, ++row) {
       const int ch = m.channels[c];
       if (ch < 0 || ch >= channels[k].rows()) {
@@ -41,6 +45,7 @@ Eigen::MatrixXd whitenedResiduals(const MeasurementSeries& series, const NoiseMo
       }
       r.row(row) = scale[c] * (m.values[c] - channels[k].row(ch).array());
     }
+    if (white.active()) white.whiten(r.middleRows(first, row - first));
   }
   return r;
 }

@@ -86,7 +86,8 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     inputs_->setNoiseCorrelation(b.u, std::min(0.999, a + shared / (absolute_[b.u] * absolute_[b.u])));
   }
   accel_z_ = type.description().channelIndex("accel_z");
-  inherited_ = Eigen::VectorXd::Zero(static_cast<Eigen::Index>(channels.size()));
+  inherited_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(channels.size()),
+                                     static_cast<Eigen::Index>(channels.size()));
 }
 
 std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
@@ -113,10 +114,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
   inherited_ = inherited_at_(static_cast<std::size_t>(samples_ - 1));
-  o.extra_variances.resize(o.values.size());
-  for (std::size_t j = 0; j < o.channels.size(); ++j) {
-    o.extra_variances[static_cast<Eigen::Index>(j)] = inherited_[o.channels[j]];
-  }
+  o.extra_covariance = inherited_(o.channels, o.channels);
   *out = std::move(o);
   return "";
 }

@@ -39,9 +39,9 @@ class RoadFreeStream {
   const ReadingInputs& inputs() const { return *inputs_; }
   const Eigen::VectorXd& inputNoiseStd() const { return absolute_; }
 
-  // Appends m's inputs and writes its outputs to `out`, each with the
-  // variance it inherits from the noise of this sample's inputs
-  // (Measurement::extra_variances). Returns "" or why the sample was refused (an input not
+  // Appends m's inputs and writes its outputs to `out`, with the covariance
+  // they inherit from the noise of this sample's inputs
+  // (Measurement::extra_covariance). Returns "" or why the sample was refused (an input not
   // read yet, a time not after the last); then nothing changes.
   std::string add(const Measurement& m, Measurement* out);
 
@@ -71,7 +71,7 @@ class RoadFreeStream {
   long accel_z_count_ = 0;
   long samples_ = 0;
   MechanicalModel::SampleInputNoise inherited_at_;
-  Eigen::VectorXd inherited_;  // per model channel
+  Eigen::MatrixXd inherited_;  // between model channels
 };
 
 // A whole record through the stream: the model and the outputs. Throws

@@ -228,7 +228,7 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
   const std::vector<int> integrated = gyros ? std::vector<int>{kGyroX, kGyroY} : std::vector<int>{};
   return [c, integrated, absolute, relative, gyros, inputs = inputs_](std::size_t k) {
     const auto& p = c->points.front();
-    const Eigen::VectorXd v = inputOutputVarianceAt(
+    const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 4,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* angle,
             double* out) {
@@ -236,16 +236,16 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
           outputs(*c, p, now, before, at_rest, dt, gyros ? angle[0] : 0.0, gyros ? -angle[1] : 0.0,
                   gyro_before, out);
         });
-    Eigen::VectorXd variance = Eigen::VectorXd::Zero(12);
-    variance.tail(4) = v;
-    return variance;
+    Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(12, 12);
+    covariance.bottomRightCorner(4, 4) = v;
+    return covariance;
   };
 }
 
 Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
-  return meanOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
+  return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
                          inputs_->times().size(), 12);
 }
 

@@ -5,20 +5,21 @@
 
 namespace pc_ekf {
 
-Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k,
-                                      const Eigen::VectorXd& absolute,
-                                      const Eigen::VectorXd& relative,
-                                      const std::vector<int>& integrated, int outputs,
-                                      const ReadingOutputs& evaluate) {
+Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t k,
+                                        const Eigen::VectorXd& absolute,
+                                        const Eigen::VectorXd& relative,
+                                        const std::vector<int>& integrated, int outputs,
+                                        const ReadingOutputs& evaluate) {
   const int n = inputs.count();
   const int m = static_cast<int>(integrated.size());
   const std::vector<double>& t = inputs.times();
   std::vector<double> now0(static_cast<std::size_t>(n)), before0(now0.size()), now(now0.size()),
       before(now0.size()), attitude(static_cast<std::size_t>(std::max(m, 1)));
   std::vector<double> plus(static_cast<std::size_t>(outputs)), minus(plus.size());
-  Eigen::VectorXd variance = Eigen::VectorXd::Zero(outputs);
-  // Each input's change of the outputs by its noise at k (row 0) and at k - 1
-  // (row 1): correlated noise (a blended travel) adds 2 rho d_now d_before.
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(outputs, outputs);
+  Eigen::VectorXd d(outputs);
+  // Each input's change of the outputs by its noise at k and at k - 1:
+  // correlated noise (a blended travel) adds rho (d_now d_before' + its transpose).
   Eigen::MatrixXd now_change = Eigen::MatrixXd::Zero(n, outputs), before_change = now_change;
   const bool at_rest = k == 0;
   const double dt = t[k] - (at_rest ? 0.0 : t[k - 1]);
@@ -47,23 +48,24 @@ Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k
       evaluate(now.data(), before.data(), at_rest, dt, attitude.data(),
                sign > 0 ? plus.data() : minus.data());
     }
-    for (int r = 0; r < outputs; ++r) {
-      const double d = 0.5 * (plus[r] - minus[r]);  // derivative times std
-      variance[r] += d * d;
-      if (!angle) (which < n ? now_change : before_change)(i, r) = d;
-    }
+    for (int r = 0; r < outputs; ++r) d[r] = 0.5 * (plus[r] - minus[r]);  // derivative times std
+    // One noise moves every output: the outputs' errors are correlated.
+    covariance.noalias() += d * d.transpose();
+    if (!angle) (which < n ? now_change : before_change).row(i) = d.transpose();
   }
   for (int i = 0; i < n && !at_rest; ++i) {
     const double rho = inputs.noiseCorrelation(i);
-    if (rho != 0.0) variance += 2.0 * rho * now_change.row(i).cwiseProduct(before_change.row(i)).transpose();
+    if (rho == 0.0) continue;
+    const Eigen::MatrixXd cross = now_change.row(i).transpose() * before_change.row(i);
+    covariance += rho * (cross + cross.transpose());
   }
-  return variance;
+  return covariance;
 }
 
-Eigen::VectorXd meanOverSamples(const std::function<Eigen::VectorXd(std::size_t)>& at,
-                                std::size_t samples, int channels) {
+Eigen::VectorXd meanVarianceOverSamples(const std::function<Eigen::MatrixXd(std::size_t)>& at,
+                                        std::size_t samples, int channels) {
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(channels);
-  for (std::size_t k = 0; k < samples; ++k) sum += at(k);
+  for (std::size_t k = 0; k < samples; ++k) sum += at(k).diagonal();
   return sum / static_cast<double>(std::max<std::size_t>(samples, 1));
 }
 

@@ -23,16 +23,19 @@ using ReadingOutputs = std::function<void(const double* now, const double* befor
 // input (e.g. a gyro's angle) by absolute * sqrt(dt * t_k) (the random walk
 // of its integral up to t_k), one at a time (central differences). The noise
 // of an input at k and at k - 1 is correlated by inputs.noiseCorrelation
-// (0: independent). Returns, per output, the variance of the summed changes.
-Eigen::VectorXd inputOutputVarianceAt(const ReadingInputs& inputs, std::size_t k,
-                                      const Eigen::VectorXd& absolute,
-                                      const Eigen::VectorXd& relative,
-                                      const std::vector<int>& integrated, int outputs,
-                                      const ReadingOutputs& evaluate);
+// (0: independent). Returns the covariance of the summed changes between
+// the outputs (outputs x outputs): one input's noise moves every output that
+// reads it, so the outputs' errors are correlated.
+Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t k,
+                                        const Eigen::VectorXd& absolute,
+                                        const Eigen::VectorXd& relative,
+                                        const std::vector<int>& integrated, int outputs,
+                                        const ReadingOutputs& evaluate);
 
-// The mean of `at` (per model channel, `channels` long) over samples 0..n-1.
-Eigen::VectorXd meanOverSamples(const std::function<Eigen::VectorXd(std::size_t)>& at,
-                                std::size_t samples, int channels);
+// The mean of the diagonal of `at` (per model channel, `channels` square)
+// over samples 0..n-1.
+Eigen::VectorXd meanVarianceOverSamples(const std::function<Eigen::MatrixXd(std::size_t)>& at,
+                                        std::size_t samples, int channels);
 
 // The load a tare record weighs: the springs' mean force (`spring_force` of
 // the inputs at a sample) over the record's mean accel_z, less the body

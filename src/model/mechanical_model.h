@@ -87,14 +87,16 @@ class MechanicalModel {
   // True for a channel this model takes as an input (road-free models take
   // the suspension readings): it is read, but not predicted.
   virtual bool channelIsInput(int /*channel*/) const { return false; }
-  // Road-free models: per model channel, the variance a predicted reading
-  // inherits from the noise of the input readings (errors in variables); an
-  // input's noise std is hypot(absolute, relative * reading), one entry per
-  // input; mean_accel_z the record's (0: unknown). By sample (the sample's
-  // own inputs, those before it for the gyro's angle): a function of the
-  // sample index, prepared once (the load weighed by the inputs so far).
-  // Null for other models. inputNoiseVariance: its mean over the samples.
-  using SampleInputNoise = std::function<Eigen::VectorXd(std::size_t sample)>;
+  // Road-free models: between model channels (channels x channels), the
+  // covariance predicted readings inherit from the noise of the input
+  // readings (errors in variables; the channels read the same inputs, so
+  // their errors are correlated); an input's noise std is hypot(absolute,
+  // relative * reading), one entry per input; mean_accel_z the record's (0:
+  // unknown). By sample (the sample's own inputs, those before it for the
+  // gyro's angle): a function of the sample index, prepared once (the load
+  // weighed by the inputs so far). Null for other models.
+  // inputNoiseVariance: the mean of its diagonal over the samples.
+  using SampleInputNoise = std::function<Eigen::MatrixXd(std::size_t sample)>;
   virtual SampleInputNoise inputNoiseBySample(const Eigen::VectorXd& /*absolute*/,
                                               const Eigen::VectorXd& /*relative*/,
                                               double /*mean_accel_z*/) const {

@@ -218,7 +218,7 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
   const std::vector<int> integrated = n > kGyro ? std::vector<int>{kGyro} : std::vector<int>{};
   return [c, integrated, absolute, relative, n, inputs = inputs_](std::size_t k) {
     const RoadFreeConstants::Point& p = c->points.front();
-    const Eigen::VectorXd v = inputOutputVarianceAt(
+    const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 3,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
             double* out) {
@@ -226,16 +226,16 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
           outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
                   gyro_before, out);
         });
-    Eigen::VectorXd variance = Eigen::VectorXd::Zero(7);
-    variance.tail(3) = v;
-    return variance;
+    Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(7, 7);
+    covariance.bottomRightCorner(3, 3) = v;
+    return covariance;
   };
 }
 
 Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
-  return meanOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
+  return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
                          inputs_->times().size(), 7);
 }
 

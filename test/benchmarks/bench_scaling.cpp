@@ -166,11 +166,11 @@ void BM_WholeSet(benchmark::State& state) {
       // (b) forecastRecord = (a) + stacking and projection of 4N observations.
       ForecastReport report;
       c0 = threadCpuSeconds();
-      const StackedObservations obs = forecastRecord(prop, theta, s.series, &report);
+      const StackedObservations obs = forecastRecord(prop, theta, s.series, noise, &report);
       record = std::min(record, threadCpuSeconds() - c0);
       // (c) the Kalman update of the parameter coefficients with 4N observations.
       Eigen::MatrixXd updated = theta;
-      const Eigen::VectorXd rv = noise.stackedVariances(s.series);
+      const Eigen::VectorXd rv = obs.variances;
       c0 = threadCpuSeconds();
       const UpdateDiagnostics d = pcKalmanUpdate(updated, obs.z_coeffs, obs.z, rv, s.config.update);
       update = std::min(update, threadCpuSeconds() - c0);

@@ -10,6 +10,7 @@
 
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/posterior_residual.h"
 #include "linear_forced_model.h"
 #include "pc_ekf/pc/pc_statistics.h"
 
@@ -100,8 +101,13 @@ void kalmanStep(const Eigen::MatrixXd& phi, const Measurement& m, const NoiseMod
   kf->mean = phi * kf->mean;
   kf->cov = phi * kf->cov * phi.transpose();
   const Eigen::MatrixXd h = observationRows(m);
-  const Eigen::MatrixXd s =
-      h * kf->cov * h.transpose() + Eigen::MatrixXd(noise.variances(m).asDiagonal());
+  // R in full: the sensor's diagonal and, off it, what the readings share.
+  Eigen::MatrixXd r = noise.variances(m).asDiagonal();
+  if (m.extra_covariance.size() != 0) {
+    r += m.extra_covariance;
+    r.diagonal() = noise.variances(m);
+  }
+  const Eigen::MatrixXd s = h * kf->cov * h.transpose() + r;
   const Eigen::MatrixXd k = kf->cov * h.transpose() * s.inverse();
   kf->mean += k * (m.values - h * kf->mean);
   kf->cov = (Eigen::MatrixXd::Identity(4, 4) - k * h) * kf->cov;
@@ -159,6 +165,84 @@ TEST(LinearGaussian, PaperRuleKeepsTheMeanUpdateWithJosephCovariance) {
   EXPECT_LT(worst_mean, 1e-10);
   EXPECT_LT(worst_cov, 1e-10);
   EXPECT_GT(removed_extra, 0.0);  // K R K^T is really removed
+}
+
+// Errors in variables: the two channels' noise correlated (rho -0.6) through
+// a shared part, as when both are predicted from the same noisy inputs.
+Problem withCorrelatedNoise() {
+  Problem p = makeProblem();
+  for (Measurement& m : p.data) {
+    m.extra_covariance = Eigen::MatrixXd::Zero(m.values.size(), m.values.size());
+    if (m.values.size() != 2) continue;
+    const Eigen::Vector2d sd = p.noise.variances(m).cwiseSqrt();
+    m.extra_covariance << 0.3 * sd[0] * sd[0], -0.6 * sd[0] * sd[1] * 1.3, -0.6 * sd[0] * sd[1] * 1.3,
+        0.3 * sd[1] * sd[1];
+  }
+  return p;
+}
+
+TEST(LinearGaussian, CorrelatedNoiseEveryFilterEqualsTheFullRKalmanFilter) {
+  const Problem p = withCorrelatedNoise();
+  ASSERT_TRUE(NoiseWhitening(p.noise, p.data[0]).active());
+  ASSERT_FALSE(NoiseWhitening(p.noise, p.data[2]).active());  // one channel
+  const Eigen::MatrixXd phi = transitionMatrix(p);
+  Gaussian kf = priorOf(p), diagonal = priorOf(p);
+  OneStepSettings settings;
+  settings.noise = p.noise;
+  OneStepFilter filter(p.propagator, settings);
+  double worst_mean = 0.0, worst_cov = 0.0, nis_diff = 0.0;
+  for (const Measurement& m : p.data) {
+    const Eigen::MatrixXd predicted = phi * kf.cov * phi.transpose();
+    const Eigen::VectorXd innovation = m.values - observationRows(m) * phi * kf.mean;
+    kalmanStep(phi, m, p.noise, &kf);
+    Measurement without = m;
+    without.extra_covariance = m.extra_covariance.diagonal().asDiagonal();
+    kalmanStep(phi, without, p.noise, &diagonal);
+    const StepResult r = filter.process(m);
+    Eigen::MatrixXd rr = p.noise.variances(m).asDiagonal();
+    rr += m.extra_covariance;
+    rr.diagonal() = p.noise.variances(m);
+    const Eigen::MatrixXd h = observationRows(m);
+    const double nis = innovation.dot((h * predicted * h.transpose() + rr).ldlt().solve(innovation));
+    nis_diff = std::max(nis_diff, std::abs(r.update.nis - nis) / nis);
+    worst_mean = std::max(worst_mean, maxDiff(filter.state().col(0), kf.mean) / kf.mean.norm());
+    worst_cov = std::max(worst_cov, maxDiff(pcCovariance(filter.state()), kf.cov) / kf.cov.norm());
+  }
+  EXPECT_LT(worst_mean, 1e-10);
+  EXPECT_LT(worst_cov, 1e-10);
+  EXPECT_LT(nis_diff, 1e-9);
+  // The correlation matters: the diagonal R's answer is another one.
+  EXPECT_GT(maxDiff(diagonal.cov, kf.cov) / kf.cov.norm(), 1e-3);
+
+  const Gaussian ref{kf.mean.tail(2), kf.cov.bottomRightCorner(2, 2)};
+  const BatchResult whole = batchUpdate(*p.propagator, p.data, p.noise, UpdateRule::kSquareRoot, {1.0});
+  const BatchResult esmda =
+      batchUpdate(*p.propagator, p.data, p.noise, UpdateRule::kSquareRoot, {4.0, 4.0, 4.0, 4.0});
+  for (const BatchResult* b : {&whole, &esmda}) {
+    EXPECT_LT(maxDiff(b->mean, ref.mean) / ref.mean.norm(), 1e-10);
+    EXPECT_LT(maxDiff(pcCovariance(b->coefficients), ref.cov) / ref.cov.norm(), 1e-10);
+  }
+}
+
+// The likelihood's residuals (the reference posterior, the predictive check)
+// whitened by the full R: |r|^2 = e' R^-1 e.
+TEST(LinearGaussian, WhitenedResidualsTakeTheFullR) {
+  const Problem p = withCorrelatedNoise();
+  std::vector<Eigen::MatrixXd> channels;
+  double expected = 0.0;
+  for (const Measurement& m : p.data) {
+    Eigen::MatrixXd c(2, 1);
+    c << 0.9 * m.values[0], 1.1 * m.values[m.values.size() - 1];
+    channels.push_back(c);
+    Eigen::VectorXd e(m.values.size());
+    for (Eigen::Index i = 0; i < e.size(); ++i) e[i] = m.values[i] - c(m.channels[i], 0);
+    Eigen::MatrixXd rr = p.noise.variances(m).asDiagonal();
+    rr += m.extra_covariance;
+    rr.diagonal() = p.noise.variances(m);
+    expected += e.dot(rr.ldlt().solve(e));
+  }
+  const Eigen::MatrixXd r = whitenedResiduals(p.data, p.noise, channels);
+  EXPECT_NEAR(r.squaredNorm(), expected, 1e-10 * expected);
 }
 
 // Batch posterior of theta: the sequential KF's final theta block.

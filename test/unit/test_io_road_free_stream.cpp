@@ -58,19 +58,26 @@ TEST(RoadFreeStream, InheritedVarianceIsTheSamplesOwn) {
     }
     const auto prefix = std::make_shared<const ReadingInputs>(inputs, times, columns);
     const auto model = c.model_type->buildRoadFree(*c.modelParameters(), prefix, c.measurement.zero);
-    const Eigen::VectorXd expected =
+    const Eigen::MatrixXd expected =
         model->inputNoiseBySample(abs_std, rel, accel_z / k)(static_cast<std::size_t>(k - 1));
     const Measurement& out = split.outputs[static_cast<std::size_t>(k - 1)];
-    ASSERT_EQ(out.extra_variances.size(), 3);
-    for (int j = 0; j < 3; ++j) {
-      EXPECT_NEAR(out.extra_variances[j], expected[out.channels[static_cast<std::size_t>(j)]],
-                  1e-12 * expected.maxCoeff())
-          << "sample " << k << " output " << j;
+    ASSERT_EQ(out.extra_covariance.rows(), 3);
+    ASSERT_EQ(out.extra_covariance.cols(), 3);
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) {
+        EXPECT_NEAR(out.extra_covariance(i, j),
+                    expected(out.channels[static_cast<std::size_t>(i)],
+                             out.channels[static_cast<std::size_t>(j)]),
+                    1e-12 * expected.maxCoeff())
+            << "sample " << k << " outputs " << i << ", " << j;
+      }
     }
     EXPECT_GT(expected.maxCoeff(), 0.0);
+    // accel_z and the gyro's increment read the same suspension inputs.
+    EXPECT_NE(out.extra_covariance(1, 2), 0.0);
   }
   // Each sample its own: the gyro's angle error grows along the record.
-  EXPECT_LT(split.outputs[20].extra_variances[0], split.outputs[39].extra_variances[0]);
+  EXPECT_LT(split.outputs[20].extra_covariance(0, 0), split.outputs[39].extra_covariance(0, 0));
 }
 
 TEST(RoadFreeStream, RefusesSamplesByName) {
@@ -213,7 +220,7 @@ TEST(RoadFreeFormulation, FiltersMatchTheExactPosteriorOfALinearCase) {
     const Measurement& out = split.outputs[s];
     ASSERT_EQ(out.channels, std::vector<int>{5});
     z.push_back(out.values[0]);
-    variance.push_back(0.05 * 0.05 + out.extra_variances[0]);
+    variance.push_back(0.05 * 0.05 + out.extra_covariance(0, 0));
   }
   const int nodes = 20000;
   std::vector<double> log_density(nodes), mass(nodes);

@@ -311,15 +311,42 @@ TEST(InputNoise, CorrelatedNoiseBetweenConsecutiveSamples) {
     out[0] = 2.0 * now[0] + 3.0 * before[0];
   };
   const Eigen::VectorXd absolute = Eigen::VectorXd::Constant(1, 0.5), relative = Eigen::VectorXd::Zero(1);
-  EXPECT_NEAR(inputOutputVarianceAt(*inputs, 1, absolute, relative, {}, 1, linear)[0],
+  EXPECT_NEAR(inputOutputCovarianceAt(*inputs, 1, absolute, relative, {}, 1, linear)(0, 0),
               0.25 * 13.0, 1e-12);
   inputs->setNoiseCorrelation(0, 0.8);
-  EXPECT_NEAR(inputOutputVarianceAt(*inputs, 1, absolute, relative, {}, 1, linear)[0],
+  EXPECT_NEAR(inputOutputCovarianceAt(*inputs, 1, absolute, relative, {}, 1, linear)(0, 0),
               0.25 * (13.0 + 2.0 * 0.8 * 6.0), 1e-12);
   // The first sample has nothing before it.
-  EXPECT_NEAR(inputOutputVarianceAt(*inputs, 0, absolute, relative, {}, 1, linear)[0], 0.25 * 4.0,
-              1e-12);
+  EXPECT_NEAR(inputOutputCovarianceAt(*inputs, 0, absolute, relative, {}, 1, linear)(0, 0),
+              0.25 * 4.0, 1e-12);
   EXPECT_THROW(inputs->setNoiseCorrelation(0, 1.0), std::invalid_argument);
+}
+
+// Two outputs of the same two inputs: their errors are correlated, by the
+// closed form J S J' (J the outputs' derivatives by the inputs' noise, S the
+// noise's covariance, consecutive samples of input 0 correlated by rho).
+TEST(InputNoise, OutputsOfTheSameInputsAreCorrelated) {
+  auto inputs = std::make_shared<ReadingInputs>(
+      std::vector<std::string>{"x", "y"}, std::vector<double>{0.1, 0.2},
+      std::vector<std::vector<double>>{{1.0, 2.0}, {-1.0, 0.5}});
+  const ReadingOutputs linear = [](const double* now, const double* before, bool, double,
+                                   const double*, double* out) {
+    out[0] = 2.0 * now[0] - now[1] + 3.0 * before[0];
+    out[1] = 4.0 * now[0] + 0.5 * before[1];
+  };
+  const Eigen::Vector2d absolute(0.5, 0.2), relative = Eigen::Vector2d::Zero();
+  inputs->setNoiseCorrelation(0, 0.6);
+  // Noise sources: x now, y now, x before, y before.
+  Eigen::Matrix<double, 2, 4> j;
+  j << 2.0, -1.0, 3.0, 0.0,
+       4.0, 0.0, 0.0, 0.5;
+  Eigen::Matrix4d s = Eigen::Vector4d(0.25, 0.04, 0.25, 0.04).asDiagonal();
+  s(0, 2) = s(2, 0) = 0.6 * 0.25;
+  const Eigen::Matrix2d expected = j * s * j.transpose();
+  const Eigen::MatrixXd got = inputOutputCovarianceAt(*inputs, 1, absolute, relative, {}, 2, linear);
+  ASSERT_EQ(got.rows(), 2);
+  ASSERT_EQ(got.cols(), 2);
+  EXPECT_LT((got - expected).cwiseAbs().maxCoeff(), 1e-12) << got << "\nexpected\n" << expected;
 }
 
 }  // namespace
