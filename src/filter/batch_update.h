@@ -67,4 +67,10 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
                                  const std::vector<double>& alphas, SupportRule support,
                                  const BatchRestarts& restarts);
 
+// ES-MDA: the keys of filter.es_mda (estimator_config.h reads the section
+// into this struct): the passes' inflation factors and the restarts.
+struct EsMdaSettings : BatchRestarts {
+  std::vector<double> alphas{4.0, 4.0, 4.0, 4.0};  // sum of 1/alpha must be 1
+};
+
 }  // namespace pc_ekf

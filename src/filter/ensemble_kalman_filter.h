@@ -14,16 +14,23 @@
 
 namespace pc_ekf {
 
-struct EnkfSettings {
+// The ensemble: the keys of filter.enkf (estimator_config.h reads the
+// section into this struct).
+struct EnkfEnsemble {
   int members = 200;
   std::uint64_t seed = 7;
-  NoiseModel noise;
-  IntegratorSettings integration;
-  int threads = 2;
   // false: perturbed observations (docs/method.md §4.7, the baseline). true: the serial
   // square-root rule of docs/method.md §4.3 on the ensemble (an EAKF), which isolates
   // the effect of observation perturbations when comparing with the PC-EKF.
   bool square_root = false;
+};
+
+// The ensemble, and what the filter shares with the other methods: R, the
+// integrator and the threads (makeEnkfSettings, estimation_setup.h).
+struct EnkfSettings : EnkfEnsemble {
+  NoiseModel noise;
+  IntegratorSettings integration;
+  int threads = 2;
 };
 
 struct EnkfStep {

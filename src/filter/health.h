@@ -17,9 +17,18 @@
 
 namespace pc_ekf {
 
-struct HealthSettings {
+// The windows and the confidence the checks judge by: keys of health:
+// (estimator_config.h reads them into this struct, with the section's others).
+struct HealthLimits {
   int nis_window = 10;
   double nis_confidence = 0.99;  // two-sided
+  // The safeguards' rates (SafeguardRates, docs/method.md §5.9): the window
+  // in s, and the expected time between load changes (re-opens) in s.
+  double rate_window = 10.0;
+  double reopen_interval = 60.0;
+};
+
+struct HealthSettings : HealthLimits {
   int support_draws = 2000;      // germ samples for the outside-support mass
   // assess() computes the mass outside the support at every k-th sample (0:
   // never); at the others it leaves mass_outside_support empty and
@@ -32,10 +41,6 @@ struct HealthSettings {
   // Relative leave-one-out error of the forecast's projection above which a
   // channel is flagged (warning: the expansion misses part of the response).
   double loo_warning = 0.1;
-  // The safeguards' rates (SafeguardRates, docs/method.md §5.9): the window
-  // in s, and the expected time between load changes (re-opens) in s.
-  double rate_window = 10.0;
-  double reopen_interval = 60.0;
 };
 
 struct HealthStatus {

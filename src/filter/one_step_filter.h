@@ -16,17 +16,14 @@
 
 namespace pc_ekf {
 
-struct OneStepSettings {
+// The safeguards, and the update rule, R, health checks and gate.
+struct OneStepSettings : SafeguardSettings {
   UpdateRule rule = UpdateRule::kSquareRoot;
   NoiseModel noise;
   HealthSettings health;
   // Innovation gate: a sample whose NIS exceeds the chi-square quantile
   // 1 - innovation_gate (its channel count as dof) is not used (0 = off).
   double innovation_gate = 0.0;
-  SupportRule support = SupportRule::kIgnore;
-  Eigen::VectorXd drift;  // per parameter, random-walk std per sqrt(s) (empty = none)
-  ReopenSettings reopen;
-  RelinearizeSettings relinearize;
 };
 
 struct StepResult {

@@ -22,13 +22,18 @@
 
 namespace pc_ekf {
 
-struct ReferencePosteriorSettings {
+// The grids: the keys of filter.grid (estimator_config.h reads the section
+// into this struct).
+struct PosteriorGrid {
   int coarse_points = 101;  // per germ, over the prior's range
   int fine_points = 33;     // per principal axis
   double fine_span_sigmas = 8.0;
   double border_mass_tolerance = 1e-6;  // border mass / mode mass
   int threads = 2;
-  int bins = 60;  // marginal histograms
+};
+
+struct ReferencePosteriorSettings : PosteriorGrid {
+  int bins = 60;  // marginal histograms (pdf.bins)
   // Tuning knobs: how many coarse local maxima are refined (best
   // coarse values first), and how far below the best refined peak a mode may
   // lie (log density) and still get a fine grid. The margin is applied after

@@ -54,6 +54,17 @@ struct RelinearizeSettings {
   bool prior_correction = false;
 };
 
+// Behaviour on data the model does not explain: the keys filter.support,
+// filter.drift, filter.reopen and filter.relinearize (estimator_config.h
+// reads them into this struct, whose support rule the batch methods take
+// too; the one-step filter applies them all, OneStepSettings).
+struct SafeguardSettings {
+  SupportRule support = SupportRule::kIgnore;
+  Eigen::VectorXd drift;  // per parameter, random-walk std per sqrt(s) (empty = none)
+  ReopenSettings reopen;
+  RelinearizeSettings relinearize;  // one-step
+};
+
 // Largest gamma in [0, 1] such that before + gamma (after - before) keeps every
 // mean strictly inside [lower, upper] (a margin of 1e-3 of the width; an
 // infinite bound never binds). A mean already outside may only move inwards.

@@ -185,42 +185,25 @@ NoiseModel makeNoiseModel(const EstimatorConfig& c) {
 
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c) {
   ReferencePosteriorSettings s;
-  s.coarse_points = c.grid.coarse_points;
-  s.fine_points = c.grid.fine_points;
-  s.fine_span_sigmas = c.grid.fine_span_sigmas;
-  s.border_mass_tolerance = c.grid.border_mass_tolerance;
-  s.threads = c.grid.threads;
+  static_cast<PosteriorGrid&>(s) = c.grid;
   s.bins = c.pdf.bins;
   return s;
 }
 
 OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
   OneStepSettings s;
+  static_cast<SafeguardSettings&>(s) = c.safeguards;
   s.rule = c.update;
   s.noise = makeNoiseModel(c);
-  s.health.nis_window = c.health.nis_window;
-  s.health.nis_confidence = c.health.nis_confidence;
+  static_cast<HealthLimits&>(s.health) = c.health;
   s.health.seed = c.pdf.seed;
   s.health.loo_warning = c.collocation.loo_warning;
-  s.health.rate_window = c.health.rate_window;
-  s.health.reopen_interval = c.health.reopen_interval;
   s.innovation_gate = c.health.innovation_gate;
-  s.support = c.safeguards.support;
-  s.drift = Eigen::Map<const Eigen::VectorXd>(c.safeguards.drift.data(), c.safeguards.drift.size());
-  s.reopen = c.safeguards.reopen;
-  s.relinearize = c.safeguards.relinearize;
   return s;
 }
 
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
-  EnkfSettings s;
-  s.members = c.enkf.members;
-  s.seed = c.enkf.seed;
-  s.noise = makeNoiseModel(c);
-  s.integration = c.integration;
-  s.threads = c.grid.threads;
-  s.square_root = c.enkf.square_root;
-  return s;
+  return {c.enkf, makeNoiseModel(c), c.integration, c.grid.threads};
 }
 
 std::string zeroConventionProblem(const EstimatorConfig& c, const MeasurementSeries& series) {

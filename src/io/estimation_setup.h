@@ -41,6 +41,9 @@ bool separateBatchDesign(const EstimatorConfig& c);
 
 std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model);
+// The filters' settings: their own keys (filter.support, .drift, .reopen,
+// .relinearize, filter.enkf, health:) as parsed, with what they share with the
+// other sections (R from measurement:, the integrator, the seeds and threads).
 OneStepSettings makeOneStepSettings(const EstimatorConfig& c);
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c);
 NoiseModel makeNoiseModel(const EstimatorConfig& c);

@@ -193,7 +193,7 @@ BasisTruncation readTruncation(YamlMapReader& pc) {
 bool readFlag(YamlMapReader& r, const std::string& key, bool value);
 
 void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
-  SafeguardConfig& s = c.safeguards;
+  SafeguardSettings& s = c.safeguards;
   std::string support = toString(s.support);
   f.text("support", support);
   try {
@@ -202,17 +202,19 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
     f.fail("support", "'" + support + "'", "damp or ignore");
   }
   const std::size_t n = c.uncertain.size(), loads = c.loadCount();
-  f.numberList("drift", s.drift, 0, n);
-  if (!s.drift.empty() && s.drift.size() != n && s.drift.size() != loads) {
-    f.fail("drift", "a list of " + std::to_string(s.drift.size()),
+  std::vector<double> drift;
+  f.numberList("drift", drift, 0, n);
+  if (!drift.empty() && drift.size() != n && drift.size() != loads) {
+    f.fail("drift", "a list of " + std::to_string(drift.size()),
            "one random-walk intensity per uncertain parameter (" + std::to_string(loads) +
                (n != loads ? ", or " + std::to_string(n) + " with the tolerances" : std::string()) +
                ")");
   }
-  s.drift.resize(s.drift.empty() ? 0 : n, 0.0);  // tolerances: vehicle values do not drift
-  for (double d : s.drift) {
+  drift.resize(drift.empty() ? 0 : n, 0.0);  // tolerances: vehicle values do not drift
+  for (double d : drift) {
     if (!(d >= 0.0) || !std::isfinite(d)) f.fail("drift", std::to_string(d), "intensities >= 0");
   }
+  s.drift = Eigen::Map<const Eigen::VectorXd>(drift.data(), static_cast<Eigen::Index>(drift.size()));
   YamlMapReader r = f.map("reopen");
   std::string mode = toString(s.reopen.mode);
   r.text("mode", mode);
@@ -695,20 +697,19 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   } catch (const std::invalid_argument&) {
     col.fail("projection", "'" + projection + "'", "auto, regression or quadrature");
   }
-  if (c.collocation.projection == ProjectionMethod::kQuadrature &&
-      c.collocation.sequence != PointSequence::kGauss &&
-      c.collocation.sequence != PointSequence::kSmolyak) {
-    col.fail("projection", "'quadrature'",
-             "regression or auto for sequence " + seq + " (quadrature needs gauss or smolyak)");
-  }
-  if (c.collocation.sequence == PointSequence::kSmolyak &&
-      c.collocation.projection == ProjectionMethod::kQuadrature &&
-      c.collocation.designCount(c.pc_order) < c.pc_order) {
-    col.fail("level", std::to_string(c.collocation.level),
-             "at least pc.order = " + std::to_string(c.pc_order) +
-                 " for the quadrature projection (exact to degree 2 level + 1), or "
-                 "projection: regression");
-  }
+  // The design's rules (designRuleBreach), for both designs: the one-step
+  // filter's and the batch methods' (collocation.batch_points).
+  const auto checkDesign = [&](int count, std::size_t basis_terms, const char* points_key) {
+    const DesignRuleBreach b =
+        designRuleBreach(c.collocation.sequence, count, c.collocation.projection, n, c.pc_order,
+                         basis_terms);
+    if (!b.setting.empty()) col.fail(b.setting == "points" ? points_key : b.setting, b.value, b.needs);
+  };
+  checkDesign(c.collocation.designCount(c.pc_order), terms, "points");
+  checkDesign(c.collocation.sequence == PointSequence::kSmolyak
+                  ? c.collocation.designCount(c.pc_order)
+                  : c.collocation.batchPoints(),
+              batch_terms, "batch_points");
   c.collocation.nested = readFlag(col, "nested", c.collocation.nested);
   if (c.collocation.nested && c.collocation.sequence != PointSequence::kSmolyak) {
     col.fail("nested", "true", "false for sequence " + seq + " (nested rules are smolyak's)");
@@ -731,20 +732,9 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
                  "), a model run each per sample; Halton needs about twice the basis terms (" +
                  std::to_string(terms) + ")");
   }
-  if (c.collocation.sequence != PointSequence::kSmolyak && q < terms) {
-    col.fail("points", std::to_string(c.collocation.points),
-             "at least S = " + std::to_string(terms) + " collocation points (basis terms for " +
-                 std::to_string(n) + " germs, order " + std::to_string(c.pc_order) + ")");
-  }
   const double batch_q = c.collocation.sequence == PointSequence::kGauss
                              ? std::pow(c.collocation.batchPoints(), n)
                              : c.collocation.batchPoints();
-  if (c.collocation.sequence != PointSequence::kSmolyak && batch_q < batch_terms) {
-    col.fail("batch_points", std::to_string(c.collocation.batchPoints()),
-             "at least S = " + std::to_string(batch_terms) +
-                 " collocation points (the batch methods' basis terms for " + std::to_string(n) +
-                 " germs, order " + std::to_string(c.pc_order) + ")");
-  }
   if (c.collocation.sequence == PointSequence::kGauss && batch_q > kMaxTensorNodes) {
     col.fail("batch_points", std::to_string(c.collocation.batchPoints()),
              "at most " + std::to_string(static_cast<int>(kMaxTensorNodes)) +

@@ -11,8 +11,12 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/filter/batch_update.h"
+#include "pc_ekf/filter/ensemble_kalman_filter.h"
+#include "pc_ekf/filter/health.h"
 #include "pc_ekf/filter/kalman_update.h"
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/reference_posterior.h"
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/filter/update_safeguards.h"
@@ -118,45 +122,13 @@ struct CollocationConfig {
   }
 };
 
-struct EsMdaConfig {
-  std::vector<double> alphas{4.0, 4.0, 4.0, 4.0};  // sum of 1/alpha must be 1
-  int restarts = 0;    // re-runs from a working prior (batch_update.h)
-  double width = 2.0;  // the working prior's std, x the last result's
-};
-
-struct EnkfConfig {
-  int members = 200;
-  std::uint64_t seed = 7;
-  bool square_root = false;  // update: perturbed (baseline) | square_root (EAKF)
-};
-
-struct GridConfig {
-  int coarse_points = 101;    // per germ dimension, on the prior support
-  int fine_points = 33;       // per principal axis around each mode
-  double fine_span_sigmas = 8.0;
-  double border_mass_tolerance = 1e-6;
-  int threads = 2;
-};
-
-struct HealthConfig {
-  int nis_window = 10;
-  double nis_confidence = 0.99;  // two-sided
+// The health: section: the checks' limits (HealthLimits), and the keys of
+// the node's coherence filter, the one-step gate and the batch methods' check.
+struct HealthConfig : HealthLimits {
   int coherence_decimation = 10;
   double coherence_threshold = 3.0;
   double innovation_gate = 0.0;  // one-step: tail probability of the NIS gate (0 = off)
   bool predictive_check = true;  // batch methods: posterior-predictive check drives health
-  // One-step: the safeguards' rates (docs/method.md §5.9) over the last
-  // rate_window s and over the run; re-opens expected once per reopen_interval s.
-  double rate_window = 10.0;
-  double reopen_interval = 60.0;
-};
-
-// Behaviour on data the model does not explain (filter.support, .drift, .reopen).
-struct SafeguardConfig {
-  SupportRule support = SupportRule::kDamp;
-  std::vector<double> drift;  // per uncertain parameter, random-walk std per sqrt(s) (empty = none)
-  ReopenSettings reopen;
-  RelinearizeSettings relinearize;  // one-step (filter.relinearize)
 };
 
 struct PdfConfig {
@@ -234,11 +206,13 @@ struct EstimatorConfig {
   TruthConfig truth;
   IntegratorSettings integration;
   UpdateRule update = UpdateRule::kSquareRoot;
-  EsMdaConfig es_mda;
-  EnkfConfig enkf;
-  GridConfig grid;
+  EsMdaSettings es_mda;
+  EnkfEnsemble enkf;
+  PosteriorGrid grid;
   HealthConfig health;
-  SafeguardConfig safeguards;
+  // filter.support, .drift, .reopen, .relinearize; damp unless configured.
+  SafeguardSettings safeguards{SupportRule::kDamp, Eigen::VectorXd(), ReopenSettings(),
+                               RelinearizeSettings()};
   PdfConfig pdf;
   NodeConfig node;
 

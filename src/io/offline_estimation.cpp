@@ -268,7 +268,7 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
                               const MeasurementSeries& series, const std::vector<double>& alphas) {
   BatchOutcome o;
   o.result = batchUpdateRestarted(propagator, series, makeNoiseModel(c), c.update, alphas,
-                                  c.safeguards.support, {c.es_mda.restarts, c.es_mda.width});
+                                  c.safeguards.support, c.es_mda);
   const BatchResult& b = o.result;
   o.healthy = b.finite && b.forecast.ok;
   if (!b.forecast.first_problem.empty()) o.warnings.push_back(b.forecast.first_problem);

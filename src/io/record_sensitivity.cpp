@@ -46,9 +46,10 @@ EstimatorConfig pruneTolerances(const EstimatorConfig& c, const PriorSensitivity
       out.uncertain.push_back(c.uncertain[i]);
       ++out.tolerance_count;
     }
-    if (!c.safeguards.drift.empty()) drift.push_back(c.safeguards.drift[i]);
+    if (c.safeguards.drift.size() != 0) drift.push_back(c.safeguards.drift[i]);
   }
-  out.safeguards.drift = drift;
+  out.safeguards.drift = Eigen::Map<const Eigen::VectorXd>(
+      drift.data(), static_cast<Eigen::Index>(drift.size()));
   // truth.xi and the schedule follow the parameters they belong to.
   std::vector<bool> kept(c.uncertain.size(), false);
   for (std::size_t i = 0, k = 0; i < c.uncertain.size() && k < out.uncertain.size(); ++i) {

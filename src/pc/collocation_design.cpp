@@ -68,6 +68,37 @@ PointSequence pointSequenceFromString(const std::string& name) {
                               "' (accepted: halton, scrambled_halton, hammersley, gauss, smolyak)");
 }
 
+DesignRuleBreach designRuleBreach(PointSequence sequence, int count, ProjectionMethod projection,
+                                  int dimension, int order, std::size_t terms) {
+  const bool quadrature_rule =
+      sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
+  if (projection == ProjectionMethod::kQuadrature && !quadrature_rule) {
+    return {"projection", "'quadrature'",
+            "regression or auto for sequence " + toString(sequence) +
+                " (the quadrature projection needs a quadrature rule: gauss or smolyak)"};
+  }
+  if (sequence == PointSequence::kSmolyak && projection == ProjectionMethod::kQuadrature &&
+      count < order) {
+    return {"level", std::to_string(count),
+            "at least the order, " + std::to_string(order) +
+                ", for the quadrature projection (level " + std::to_string(count) +
+                " integrates total degree " + std::to_string(smolyakExactDegree(count)) +
+                " exactly, the projection needs " + std::to_string(2 * order) +
+                "), or projection: regression"};
+  }
+  // For the Gauss rule `count` is per dimension; the total is compared to S
+  // before anything is built (count^n could be huge only for absurd settings).
+  const double q = sequence == PointSequence::kGauss ? std::pow(count, dimension) : count;
+  if (sequence != PointSequence::kSmolyak && q < static_cast<double>(terms)) {
+    std::ostringstream needs;
+    needs << "at least S = " << terms << " collocation points, the basis terms of order " << order
+          << " in " << dimension << " germs (" << toString(sequence) << ": Q = " << q
+          << " points < S: degenerate); least squares needs Q >= S (the paper uses Q >= 2S)";
+    return {"points", std::to_string(count), needs.str()};
+  }
+  return {};
+}
+
 namespace {
 
 std::vector<OrthonormalFamily> familiesOf(const PolynomialBasis& basis) {
@@ -89,39 +120,17 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
     throw std::invalid_argument("collocation design: point count must be positive, got " +
                                 std::to_string(count));
   }
-  const bool quadrature_rule =
-      sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
+  const DesignRuleBreach breach = designRuleBreach(sequence, count, projection, n, basis.order(),
+                                                   static_cast<std::size_t>(s));
+  if (!breach.setting.empty()) {
+    throw std::invalid_argument("collocation design: " + breach.setting + " " + breach.value +
+                                ", needs " + breach.needs);
+  }
   if (projection == ProjectionMethod::kAuto) {
     projection = sequence == PointSequence::kGauss ? ProjectionMethod::kQuadrature
                                                    : ProjectionMethod::kRegression;
   }
-  if (projection == ProjectionMethod::kQuadrature && !quadrature_rule) {
-    throw std::invalid_argument(
-        "collocation design: quadrature projection needs a quadrature rule "
-        "(gauss or smolyak), not " +
-        toString(sequence));
-  }
   projection_ = projection;
-  if (sequence == PointSequence::kSmolyak && projection == ProjectionMethod::kQuadrature &&
-      count < basis.order()) {
-    std::ostringstream msg;
-    msg << "collocation design: smolyak level " << count << " integrates total degree "
-        << smolyakExactDegree(count) << " exactly, the quadrature projection of order "
-        << basis.order() << " needs degree " << 2 * basis.order() << " (level >= " << basis.order()
-        << ", or projection: regression)";
-    throw std::invalid_argument(msg.str());
-  }
-  // For the Gauss rule `count` is per dimension; compare the total to S before
-  // building anything (count^n could be huge only for absurd configurations).
-  double q_total = 1.0;
-  for (int d = 0; d < (sequence == PointSequence::kGauss ? n : 1); ++d) q_total *= count;
-  if (sequence != PointSequence::kSmolyak && q_total < s) {
-    std::ostringstream msg;
-    msg << "collocation design degenerate: Q = " << q_total << " points < S = " << s
-        << " basis terms (" << toString(sequence) << ", order " << basis.order() << " in " << n
-        << " germs); least squares needs Q >= S (the paper uses Q >= 2S)";
-    throw std::invalid_argument(msg.str());
-  }
 
   Eigen::VectorXd weights;
   switch (sequence) {

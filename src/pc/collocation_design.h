@@ -42,6 +42,21 @@ std::string toString(ProjectionMethod m);
 ProjectionMethod projectionMethodFromString(
     const std::string& name);  // throws std::invalid_argument
 
+// A rule of the design that its settings break: which setting ("projection",
+// "level" or "points": the collocation: keys), its value and what the rule
+// needs; an empty `setting` when none is broken.
+struct DesignRuleBreach {
+  std::string setting, value, needs;
+};
+// The rules the settings of a design must keep for a basis of `terms` terms
+// of total degree `order` in `dimension` germs: the quadrature projection
+// needs a quadrature rule (gauss or smolyak), smolyak's quadrature projection
+// a level of at least the order, and the least squares Q >= S (gauss: count
+// nodes per germ). CollocationDesign throws on the first one broken; the
+// config parser names the key.
+DesignRuleBreach designRuleBreach(PointSequence sequence, int count, ProjectionMethod projection,
+                                  int dimension, int order, std::size_t terms);
+
 class CollocationDesign {
  public:
   // Builds points, A (Q x S) and the projector P (S x Q) with coeffs = P * values,
@@ -51,8 +66,9 @@ class CollocationDesign {
   // For kSmolyak, `count` is the sparse grid's level L (exact to total degree
   // 2L + 1, see sparse_grid.h); its quadrature projection needs L >= p, the
   // regression Q >= S.
-  // Throws std::invalid_argument when Q < S or cond(A) > max_condition, with
-  // a message giving Q, S and the condition number.
+  // Throws std::invalid_argument when a rule of designRuleBreach is broken
+  // (Q < S among them) or cond(A) > max_condition, with a message giving Q,
+  // S and the condition number.
   CollocationDesign(const PolynomialBasis& basis, PointSequence sequence, int count,
                     std::uint64_t halton_start = 1, double max_condition = 1e8,
                     ProjectionMethod projection = ProjectionMethod::kAuto,

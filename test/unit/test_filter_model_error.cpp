@@ -177,7 +177,7 @@ TEST(LoadChange, FollowedWithDriftOrReopenFlaggedWithout) {
   EXPECT_GT(std::abs(fixed.parameters[0].mean - new_mass), 10.0 * fixed.parameters[0].stddev);
   EXPECT_FALSE(fixed.healthy);
   EstimatorConfig drift = base;
-  drift.safeguards.drift = {2.0, 0.0};
+  drift.safeguards.drift = Eigen::Vector2d(2.0, 0.0);
   EstimatorConfig reopen = base;
   reopen.safeguards.reopen = {ReopenMode::kWidth, 0.5, 3};
   for (const EstimatorConfig& c : {drift, reopen}) {

@@ -208,7 +208,7 @@ EstimatorConfig liveBump(int samples) {
   c.health.nis_window = 20;
   c.health.innovation_gate = 1e-6;
   c.safeguards.support = SupportRule::kDamp;
-  c.safeguards.drift = {2.0, 0.0};
+  c.safeguards.drift = Eigen::Vector2d(2.0, 0.0);
   c.safeguards.reopen = {ReopenMode::kWidth, 0.5, 3};
   return c;
 }
@@ -259,7 +259,7 @@ TEST(SafeguardRateFilter, OneLoadChangeIsNotFlagged) {
       loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/load_change_course.yaml");
   c.health.nis_window = 20;
   c.health.innovation_gate = 1e-6;
-  c.safeguards.drift = {2.0, 0.0};
+  c.safeguards.drift = Eigen::Vector2d(2.0, 0.0);
   c.safeguards.reopen = {ReopenMode::kWidth, 0.5, 3};
   const auto model = makeModel(c, makeRoad(c));
   int healthy = 0, reopened = 0;

@@ -246,7 +246,7 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_EQ(c.measurement.sensor_std,
             (std::vector<double>{1e-3, 1e-3, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2}));
   EXPECT_EQ(c.safeguards.support, SupportRule::kIgnore);
-  EXPECT_EQ(c.safeguards.drift, (std::vector<double>{2.0, 0.0}));
+  EXPECT_EQ(c.safeguards.drift, Eigen::Vector2d(2.0, 0.0));
   EXPECT_EQ(c.safeguards.reopen.mode, ReopenMode::kPrior);
   EXPECT_EQ(c.safeguards.reopen.after, 7);
   EXPECT_DOUBLE_EQ(c.safeguards.relinearize.shrink, 0.01);
@@ -262,7 +262,7 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   const EstimatorConfig d = parseConfigString(kUncertain, "d.yaml");
   EXPECT_EQ(d.measurement.r_rule, NoiseRule::kPaper);
   EXPECT_EQ(d.safeguards.support, SupportRule::kDamp);
-  EXPECT_TRUE(d.safeguards.drift.empty());
+  EXPECT_EQ(d.safeguards.drift.size(), 0);
   EXPECT_EQ(d.safeguards.reopen.mode, ReopenMode::kOff);
   EXPECT_EQ(d.safeguards.relinearize.shrink, 0.0);
   EXPECT_FALSE(d.safeguards.relinearize.prior_correction);

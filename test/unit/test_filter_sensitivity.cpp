@@ -97,7 +97,7 @@ TEST(PriorSensitivity, PruneFixesOnlyTolerancesBelowTheThreshold) {
                  {"bar_length", 1.524, 0.005, GermSpec{}}};
   c.tolerance_count = 2;
   c.truth.xi = {0.2, 0.1, -0.3};
-  c.safeguards.drift = {2.0, 0.0, 0.0};
+  c.safeguards.drift = Eigen::Vector3d(2.0, 0.0, 0.0);
   PriorSensitivity s;
   s.parameters = {"added_mass", "spring_linear_left", "bar_length"};
   s.channels = {"u1", "v1"};
@@ -111,7 +111,7 @@ TEST(PriorSensitivity, PruneFixesOnlyTolerancesBelowTheThreshold) {
   EXPECT_EQ(out.uncertain[1].name, "spring_linear_left");
   EXPECT_EQ(out.tolerance_count, 1);
   EXPECT_EQ(out.truth.xi, (std::vector<double>{0.2, 0.1}));
-  EXPECT_EQ(out.safeguards.drift, (std::vector<double>{2.0, 0.0}));
+  EXPECT_EQ(out.safeguards.drift, Eigen::Vector2d(2.0, 0.0));
   ASSERT_EQ(pruned.size(), 1u);
   EXPECT_NE(pruned[0].find("bar_length"), std::string::npos);
   EXPECT_NE(pruned[0].find("9.00e-03"), std::string::npos);  // its largest index, named

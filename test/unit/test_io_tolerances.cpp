@@ -95,7 +95,7 @@ TEST(Tolerances, DriftPerLoadParameterLeavesTheVehicleFixed) {
                                                   "tolerances: {bar_inertia: 0.15}\n"
                                                   "filter: {drift: [2.0, 0.0]}\n",
                                               "t.yaml");
-  EXPECT_EQ(c.safeguards.drift, (std::vector<double>{2.0, 0.0, 0.0}));
+  EXPECT_EQ(c.safeguards.drift, Eigen::Vector3d(2.0, 0.0, 0.0));
 }
 
 TEST(Tolerances, BadInputNamesTheKey) {
