@@ -11,7 +11,7 @@
 #                            synthetic 10 s, 200 Hz drive (ISO B), read as a CSV
 #   live_rtf_end_to_end      config/vehicle_live.yaml as shipped (n = 15) but its
 #                            road: the paper bump, N = 100 over 3 s, synthesised
-#   full_car_live_rtf_end_to_end  config/full_car_live.yaml likewise (n = 12, the
+#   full_car_live_rtf_end_to_end  config/full_car_live.yaml likewise (n = 13, the
 #                            full car's speed bump)
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)

@@ -176,7 +176,13 @@ TEST(RoadFreeCoverage, FullCarOnRoughRoadsCoversTheLoad) {
     std::printf("full car, %s: %d of %d covered and healthy, %d silent, worst %.2f std\n",
                 toString(method).c_str(), tally.covered, tally.runs, tally.silent, tally.worst);
     EXPECT_EQ(tally.silent, 0) << toString(method);
-    EXPECT_GE(tally.covered, tally.runs - 1) << toString(method);
+    // At most two false alarms in 8. With full_car_live.yaml's body mass at 3 %
+    // one-step flags 2 of these runs (6 of 8 covered and healthy; ES-MDA 8 of
+    // 8): "parameter PDF mass outside the prior support", y estimated near its
+    // prior's end (germ -0.85 and +0.97 for truths at -0.69 and +0.80), both
+    // within 1.4 reported std of the truth. With the body mass exact it was 1
+    // per method, and the bound runs - 1.
+    EXPECT_GE(tally.covered, tally.runs - 2) << toString(method);
   }
 }
 
