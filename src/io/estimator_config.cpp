@@ -771,30 +771,37 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   readPerChannel(m, "noise_relative", c.measurement, c.measurement.noise_relative,
                  c.measurement.noise_relative_per_channel, model_channels);
   m.number("noise_floor", c.measurement.noise_floor, 0.0, kInf);
-  readPerChannel(m, "r_relative", c.measurement, c.measurement.r_relative,
-                 c.measurement.r_relative_per_channel, model_channels);
-  m.number("r_floor", c.measurement.r_floor, 0.0, kInf, true);
-  std::string r_rule = c.measurement.r_rule == NoiseRule::kSensor ? "sensor" : "paper";
+  // The filters' R: measurement.r_* and sensor_std, the NoiseModel's fields.
+  NoiseModel& noise = c.measurement.noise;
+  std::vector<double> r_relative_per_channel;
+  readPerChannel(m, "r_relative", c.measurement, noise.r_relative, r_relative_per_channel,
+                 model_channels);
+  noise.channel_relative = Eigen::Map<const Eigen::VectorXd>(
+      r_relative_per_channel.data(), static_cast<Eigen::Index>(r_relative_per_channel.size()));
+  m.number("r_floor", noise.r_floor, 0.0, kInf, true);
+  std::string r_rule = noise.rule == NoiseRule::kSensor ? "sensor" : "paper";
   m.text("r_rule", r_rule);
   if (r_rule != "paper" && r_rule != "sensor") m.fail("r_rule", "'" + r_rule + "'", "paper or sensor");
-  c.measurement.r_rule = r_rule == "sensor" ? NoiseRule::kSensor : NoiseRule::kPaper;
-  m.numberList("sensor_std", c.measurement.sensor_std, 0, known.size());
-  if (c.measurement.sensor_std.size() == 1) c.measurement.sensor_std.resize(known.size(), c.measurement.sensor_std[0]);
+  noise.rule = r_rule == "sensor" ? NoiseRule::kSensor : NoiseRule::kPaper;
+  std::vector<double> sensor_std;
+  m.numberList("sensor_std", sensor_std, 0, known.size());
+  if (sensor_std.size() == 1) sensor_std.resize(known.size(), sensor_std[0]);
   // One per selected channel (in measurement.channels' order): the model's
   // order, the channels not selected at the largest given (never used).
-  if (c.measurement.sensor_std.size() == c.measurement.channels.size()) {
-    c.measurement.sensor_std = inModelOrder(c.measurement.sensor_std, c.measurement.channels,
-                                            model_channels);
+  if (sensor_std.size() == c.measurement.channels.size()) {
+    sensor_std = inModelOrder(sensor_std, c.measurement.channels, model_channels);
   }
-  if (c.measurement.r_rule == NoiseRule::kSensor) {
-    if (c.measurement.sensor_std.size() != known.size()) {
-      m.fail("sensor_std", c.measurement.sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(c.measurement.sensor_std.size()),
+  if (noise.rule == NoiseRule::kSensor) {
+    if (sensor_std.size() != known.size()) {
+      m.fail("sensor_std", sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(sensor_std.size()),
              "with r_rule sensor: one absolute std per channel of measurement.channels, or per channel " + channel_list + " (or one for all)");
     }
-    for (double v : c.measurement.sensor_std) {
+    for (double v : sensor_std) {
       if (!(v > 0.0)) m.fail("sensor_std", std::to_string(v), "positive standard deviations (m, m/s)");
     }
   }
+  noise.channel_std = Eigen::Map<const Eigen::VectorXd>(
+      sensor_std.data(), static_cast<Eigen::Index>(sensor_std.size()));
   m.finish();
 
   readTruth(root.map("truth"), c);

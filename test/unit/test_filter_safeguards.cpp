@@ -240,11 +240,11 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
       "         es_mda: {alphas: [2, 2], restarts: 3, width: 1.5}}\n"
       "health: {innovation_gate: 1e-6, predictive_check: false}\n",
       "t.yaml");
-  EXPECT_EQ(c.measurement.r_rule, NoiseRule::kSensor);
+  EXPECT_EQ(c.measurement.noise.rule, NoiseRule::kSensor);
   // One per model channel: the four given for u1 u2 v1 v2, the IMU channels
   // (not selected) at the largest.
-  EXPECT_EQ(c.measurement.sensor_std,
-            (std::vector<double>{1e-3, 1e-3, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2}));
+  EXPECT_EQ(c.measurement.noise.channel_std,
+            (Eigen::VectorXd(7) << 1e-3, 1e-3, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2).finished());
   EXPECT_EQ(c.safeguards.support, SupportRule::kIgnore);
   EXPECT_EQ(c.safeguards.drift, Eigen::Vector2d(2.0, 0.0));
   EXPECT_EQ(c.safeguards.reopen.mode, ReopenMode::kPrior);
@@ -260,7 +260,7 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_FALSE(c.health.predictive_check);
   // Defaults: the paper's rule, damping on, no drift, no re-opening, gate off.
   const EstimatorConfig d = parseConfigString(kUncertain, "d.yaml");
-  EXPECT_EQ(d.measurement.r_rule, NoiseRule::kPaper);
+  EXPECT_EQ(d.measurement.noise.rule, NoiseRule::kPaper);
   EXPECT_EQ(d.safeguards.support, SupportRule::kDamp);
   EXPECT_EQ(d.safeguards.drift.size(), 0);
   EXPECT_EQ(d.safeguards.reopen.mode, ReopenMode::kOff);
