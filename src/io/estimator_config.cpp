@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "pc_ekf/filter/posterior_coarse_grid.h"
 #include "pc_ekf/io/config_identity.h"
 #include "pc_ekf/io/tolerances.h"
 #include "pc_ekf/io/vehicle_file.h"
@@ -234,10 +235,8 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   l.integer("max_samples", rl.max_samples, 1, 100000000);
   l.number("defer", rl.defer, 0.0, 1000.0);
   rl.prior_correction = readFlag(l, "prior_correction", rl.prior_correction);
-  if (!(rl.shrink * rl.width < 1.0)) {
-    l.fail("width", std::to_string(rl.width),
-           "shrink x width < 1 (each restart must narrow the working prior)");
-  }
+  const SettingBreach breach = relinearizeBreach(rl);
+  if (breach.broken()) l.fail(breach.setting, breach.value, breach.needs);
   l.finish();
 }
 
@@ -261,10 +260,10 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
     e.fail("alphas", "with sum(1/alpha) = " + std::to_string(inv), "sum(1/alpha) = 1");
   }
   e.integer("restarts", c.es_mda.restarts, 0, 100);
-  e.number("width", c.es_mda.width, 1.0, kInf, true);
+  e.number("width", c.es_mda.width, BatchRestarts::kMinWidth, kInf, true);
   e.finish();
   YamlMapReader k = f.map("enkf");
-  k.integer("members", c.enkf.members, 2, 10000000);
+  k.integer("members", c.enkf.members, EnkfEnsemble::kMinMembers, 10000000);
   k.unsignedInteger("seed", c.enkf.seed);
   std::string enkf_update = c.enkf.square_root ? "square_root" : "perturbed";
   k.text("update", enkf_update);
@@ -274,7 +273,7 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   c.enkf.square_root = enkf_update == "square_root";
   k.finish();
   YamlMapReader g = f.map("grid");
-  g.integer("coarse_points", c.grid.coarse_points, 3, 100001);
+  g.integer("coarse_points", c.grid.coarse_points, CoarseGrid::kMinPoints, 100001);
   g.integer("fine_points", c.grid.fine_points, 5, 100001);
   g.number("fine_span_sigmas", c.grid.fine_span_sigmas, 0.0, kInf, true);
   g.number("border_mass_tolerance", c.grid.border_mass_tolerance, 0.0, 1.0, true);
@@ -700,10 +699,10 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   // The design's rules (designRuleBreach), for both designs: the one-step
   // filter's and the batch methods' (collocation.batch_points).
   const auto checkDesign = [&](int count, std::size_t basis_terms, const char* points_key) {
-    const DesignRuleBreach b =
+    const SettingBreach b =
         designRuleBreach(c.collocation.sequence, count, c.collocation.projection, n, c.pc_order,
                          basis_terms);
-    if (!b.setting.empty()) col.fail(b.setting == "points" ? points_key : b.setting, b.value, b.needs);
+    if (b.broken()) col.fail(b.setting == "points" ? points_key : b.setting, b.value, b.needs);
   };
   checkDesign(c.collocation.designCount(c.pc_order), terms, "points");
   checkDesign(c.collocation.sequence == PointSequence::kSmolyak

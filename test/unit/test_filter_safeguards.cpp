@@ -192,6 +192,24 @@ TEST(Relinearize, WorkingPriorHasTheAskedMomentsInsideThePriorSupport) {
 // m_q = P_q (Q^-1 q + D y); from the prior (m0, P0), P = (P0^-1 + D)^-1,
 // m = P (P0^-1 m0 + D y). The correction turns the first into the second,
 // also when D leaves a direction unread (a ridge only the prior bounds).
+// The rules the filter and the parser share: the breach names the setting.
+TEST(Relinearize, RulesNameTheBrokenSetting) {
+  RelinearizeSettings s;
+  s.shrink = 0.01;
+  s.width = 20.0;
+  EXPECT_FALSE(relinearizeBreach(s).broken());  // 0.2 < 1
+  s.shrink = 0.1;                               // 0.1 x 20 = 2: a restart would widen
+  EXPECT_EQ(relinearizeBreach(s).setting, "width");
+  s.shrink = 1.0;
+  EXPECT_EQ(relinearizeBreach(s).setting, "shrink");
+  s.shrink = 0.01;
+  s.width = 0.0;
+  EXPECT_EQ(relinearizeBreach(s).setting, "width");
+  s.shrink = 0.0;  // off: any width > 0
+  s.width = 1e9;
+  EXPECT_FALSE(relinearizeBreach(s).broken());
+}
+
 TEST(PriorCorrection, SwapsTheWorkingPriorForThePriorInClosedForm) {
   Eigen::Matrix3d d;  // rank 2: (1, 1, 0) / sqrt(2) is unread
   const Eigen::Vector3d u(1.0, -1.0, 0.0), w(0.0, 0.0, 1.0);
