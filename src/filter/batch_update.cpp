@@ -118,7 +118,7 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
                                  const NoiseModel& noise, UpdateRule rule,
                                  const std::vector<double>& alphas, SupportRule support,
                                  const BatchRestarts& restarts) {
-  if (restarts.restarts < 0 || !(restarts.width > 1.0)) {
+  if (restarts.restarts < 0 || !(restarts.width > BatchRestarts::kMinWidth)) {
     throw std::invalid_argument("batchUpdateRestarted: need restarts >= 0 and width > 1");
   }
   BatchResult result = batchUpdate(propagator, series, noise, rule, alphas, support);

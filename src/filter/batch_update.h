@@ -59,7 +59,9 @@ BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries&
 // readings are far from linear in the parameters; the restarts' surrogates
 // span the posterior's neighbourhood. restarts = 0: batchUpdate.
 struct BatchRestarts {
-  int restarts = 0;
+  // The rule (filter.es_mda.width): width > kMinWidth, so that a restart widens.
+  static constexpr double kMinWidth = 1.0;
+  int restarts = 0;  // >= 0
   double width = 2.0;
 };
 BatchResult batchUpdateRestarted(const PcPropagator& propagator, const MeasurementSeries& series,

@@ -14,7 +14,10 @@ namespace pc_ekf {
 EnsembleKalmanFilter::EnsembleKalmanFilter(std::shared_ptr<const MechanicalModel> model,
                                            ParameterMapping mapping, const EnkfSettings& settings)
     : model_(std::move(model)), mapping_(std::move(mapping)), settings_(settings), rng_(settings.seed) {
-  if (settings.members < 2) throw std::invalid_argument("EnKF needs at least 2 members");
+  if (settings.members < EnkfEnsemble::kMinMembers) {
+    throw std::invalid_argument("EnKF needs at least " + std::to_string(EnkfEnsemble::kMinMembers) +
+                                " members");
+  }
   const PolynomialBasis basis(mapping_.germs(), 0);
   theta_ = mapping_.valuesAtGerms(sampleGerms(basis, settings.members, settings.seed));
   const Eigen::MatrixXd full = mapping_.fullParameters(theta_);

@@ -17,6 +17,7 @@ namespace pc_ekf {
 // The ensemble: the keys of filter.enkf (estimator_config.h reads the
 // section into this struct).
 struct EnkfEnsemble {
+  static constexpr int kMinMembers = 2;  // the filter's rule (filter.enkf.members)
   int members = 200;
   std::uint64_t seed = 7;
   // false: perturbed observations (docs/method.md §4.7, the baseline). true: the serial

@@ -125,9 +125,10 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
   if (settings_.drift.size() != 0 && settings_.drift.size() != n) {
     throw std::invalid_argument("drift: one intensity per uncertain parameter expected");
   }
-  const RelinearizeSettings& rl = settings_.relinearize;
-  if (!(rl.shrink >= 0.0 && rl.shrink < 1.0) || !(rl.width > 0.0) || !(rl.shrink * rl.width < 1.0)) {
-    throw std::invalid_argument("relinearize: need 0 <= shrink < 1, width > 0, shrink * width < 1");
+  const SettingBreach breach = relinearizeBreach(settings_.relinearize);
+  if (breach.broken()) {
+    throw std::invalid_argument("relinearize: " + breach.setting + " " + breach.value + ", needs " +
+                                breach.needs);
   }
   startRelinearization();
   // The re-open rule's chance rate, simulated once per process: here, before

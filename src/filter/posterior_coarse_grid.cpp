@@ -23,7 +23,10 @@ bool sameGerm(const GermSpec& a, const GermSpec& b) {
 }  // namespace
 
 CoarseGrid::CoarseGrid(const PriorDensity& prior, int points_per_axis) : points_(points_per_axis) {
-  if (points_ < 3) throw std::invalid_argument("CoarseGrid: need at least 3 points per axis");
+  if (points_ < kMinPoints) {
+    throw std::invalid_argument("CoarseGrid: need at least " + std::to_string(kMinPoints) +
+                                " points per axis");
+  }
   const int n = prior.dimension();
   Eigen::Index size = 1;
   for (int i = 0; i < n; ++i) size *= points_;

@@ -23,7 +23,8 @@ using PosteriorProgress = std::function<void(const std::string&)>;
 // ends included; nodes() is dimension x size, first germ varying fastest.
 class CoarseGrid {
  public:
-  // Throws std::invalid_argument when points_per_axis < 3.
+  static constexpr int kMinPoints = 3;  // the rule (grid.coarse_points)
+  // Throws std::invalid_argument when points_per_axis < kMinPoints.
   CoarseGrid(const PriorDensity& prior, int points_per_axis);
 
   int dimension() const { return static_cast<int>(nodes_.rows()); }

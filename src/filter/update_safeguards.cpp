@@ -75,6 +75,18 @@ void applyDrift(Eigen::MatrixXd& x, int first_parameter, const Eigen::VectorXd& 
   }
 }
 
+SettingBreach relinearizeBreach(const RelinearizeSettings& s) {
+  if (!(s.shrink >= 0.0 && s.shrink < 1.0)) {
+    return {"shrink", std::to_string(s.shrink), "a fraction in [0, 1)"};
+  }
+  if (!(s.width > 0.0)) return {"width", std::to_string(s.width), "a factor > 0"};
+  if (!(s.shrink * s.width < 1.0)) {
+    return {"width", std::to_string(s.width),
+            "shrink x width < 1 (each restart must narrow the working prior)"};
+  }
+  return {};
+}
+
 void reopenParameters(Eigen::MatrixXd& theta, const Eigen::MatrixXd& prior,
                       const ReopenSettings& s) {
   if (prior.rows() != theta.rows() || prior.cols() != theta.cols()) {

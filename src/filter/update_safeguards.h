@@ -8,6 +8,8 @@
 #include <Eigen/Dense>
 #include <string>
 
+#include "pc_ekf/pc/setting_breach.h"
+
 
 namespace pc_ekf {
 
@@ -53,6 +55,10 @@ struct RelinearizeSettings {
   // without losing what only the prior says (a ridge the readings leave open).
   bool prior_correction = false;
 };
+// Its rules: 0 <= shrink < 1, width > 0 and shrink x width < 1 (each restart
+// narrows the working prior). The breach's setting: "shrink" or "width" (the
+// filter.relinearize keys). OneStepFilter throws on it; the parser names the key.
+SettingBreach relinearizeBreach(const RelinearizeSettings& s);
 
 // Behaviour on data the model does not explain: the keys filter.support,
 // filter.drift, filter.reopen and filter.relinearize (estimator_config.h

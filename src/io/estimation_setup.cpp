@@ -171,18 +171,6 @@ std::shared_ptr<const ParameterPdfSampler> makePdfSampler(const EstimatorConfig&
                                                      parameters, t);
 }
 
-NoiseModel makeNoiseModel(const EstimatorConfig& c) {
-  NoiseModel n;
-  n.rule = c.measurement.r_rule;
-  n.r_relative = c.measurement.r_relative;
-  n.r_floor = c.measurement.r_floor;
-  n.channel_std = Eigen::Map<const Eigen::VectorXd>(c.measurement.sensor_std.data(),
-                                                    c.measurement.sensor_std.size());
-  n.channel_relative = Eigen::Map<const Eigen::VectorXd>(
-      c.measurement.r_relative_per_channel.data(), c.measurement.r_relative_per_channel.size());
-  return n;
-}
-
 ReferencePosteriorSettings makeReferenceSettings(const EstimatorConfig& c) {
   ReferencePosteriorSettings s;
   static_cast<PosteriorGrid&>(s) = c.grid;
@@ -194,7 +182,7 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
   OneStepSettings s;
   static_cast<SafeguardSettings&>(s) = c.safeguards;
   s.rule = c.update;
-  s.noise = makeNoiseModel(c);
+  s.noise = c.measurement.noise;
   static_cast<HealthLimits&>(s.health) = c.health;
   s.health.seed = c.pdf.seed;
   s.health.loo_warning = c.collocation.loo_warning;
@@ -203,7 +191,7 @@ OneStepSettings makeOneStepSettings(const EstimatorConfig& c) {
 }
 
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
-  return {c.enkf, makeNoiseModel(c), c.integration, c.grid.threads};
+  return {c.enkf, c.measurement.noise, c.integration, c.grid.threads};
 }
 
 std::string zeroConventionProblem(const EstimatorConfig& c, const MeasurementSeries& series) {

@@ -43,10 +43,9 @@ std::shared_ptr<const PcPropagator> makePropagator(const EstimatorConfig& c,
                                                    std::shared_ptr<const MechanicalModel> model);
 // The filters' settings: their own keys (filter.support, .drift, .reopen,
 // .relinearize, filter.enkf, health:) as parsed, with what they share with the
-// other sections (R from measurement:, the integrator, the seeds and threads).
+// other sections (R: measurement.noise, the integrator, the seeds and threads).
 OneStepSettings makeOneStepSettings(const EstimatorConfig& c);
 EnkfSettings makeEnkfSettings(const EstimatorConfig& c);
-NoiseModel makeNoiseModel(const EstimatorConfig& c);
 // The PDF sampler of pdf: (draws, bins, seed; shared or per-parameter draws)
 // for `parameters` rows in `basis`, drawn on `threads` threads (the same
 // draws for any count).

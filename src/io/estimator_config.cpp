@@ -9,6 +9,7 @@
 #include <set>
 #include <sstream>
 
+#include "pc_ekf/filter/posterior_coarse_grid.h"
 #include "pc_ekf/io/config_identity.h"
 #include "pc_ekf/io/tolerances.h"
 #include "pc_ekf/io/vehicle_file.h"
@@ -234,10 +235,8 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   l.integer("max_samples", rl.max_samples, 1, 100000000);
   l.number("defer", rl.defer, 0.0, 1000.0);
   rl.prior_correction = readFlag(l, "prior_correction", rl.prior_correction);
-  if (!(rl.shrink * rl.width < 1.0)) {
-    l.fail("width", std::to_string(rl.width),
-           "shrink x width < 1 (each restart must narrow the working prior)");
-  }
+  const SettingBreach breach = relinearizeBreach(rl);
+  if (breach.broken()) l.fail(breach.setting, breach.value, breach.needs);
   l.finish();
 }
 
@@ -261,10 +260,10 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
     e.fail("alphas", "with sum(1/alpha) = " + std::to_string(inv), "sum(1/alpha) = 1");
   }
   e.integer("restarts", c.es_mda.restarts, 0, 100);
-  e.number("width", c.es_mda.width, 1.0, kInf, true);
+  e.number("width", c.es_mda.width, BatchRestarts::kMinWidth, kInf, true);
   e.finish();
   YamlMapReader k = f.map("enkf");
-  k.integer("members", c.enkf.members, 2, 10000000);
+  k.integer("members", c.enkf.members, EnkfEnsemble::kMinMembers, 10000000);
   k.unsignedInteger("seed", c.enkf.seed);
   std::string enkf_update = c.enkf.square_root ? "square_root" : "perturbed";
   k.text("update", enkf_update);
@@ -274,7 +273,7 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   c.enkf.square_root = enkf_update == "square_root";
   k.finish();
   YamlMapReader g = f.map("grid");
-  g.integer("coarse_points", c.grid.coarse_points, 3, 100001);
+  g.integer("coarse_points", c.grid.coarse_points, CoarseGrid::kMinPoints, 100001);
   g.integer("fine_points", c.grid.fine_points, 5, 100001);
   g.number("fine_span_sigmas", c.grid.fine_span_sigmas, 0.0, kInf, true);
   g.number("border_mass_tolerance", c.grid.border_mass_tolerance, 0.0, 1.0, true);
@@ -700,10 +699,10 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   // The design's rules (designRuleBreach), for both designs: the one-step
   // filter's and the batch methods' (collocation.batch_points).
   const auto checkDesign = [&](int count, std::size_t basis_terms, const char* points_key) {
-    const DesignRuleBreach b =
+    const SettingBreach b =
         designRuleBreach(c.collocation.sequence, count, c.collocation.projection, n, c.pc_order,
                          basis_terms);
-    if (!b.setting.empty()) col.fail(b.setting == "points" ? points_key : b.setting, b.value, b.needs);
+    if (b.broken()) col.fail(b.setting == "points" ? points_key : b.setting, b.value, b.needs);
   };
   checkDesign(c.collocation.designCount(c.pc_order), terms, "points");
   checkDesign(c.collocation.sequence == PointSequence::kSmolyak
@@ -771,30 +770,37 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   readPerChannel(m, "noise_relative", c.measurement, c.measurement.noise_relative,
                  c.measurement.noise_relative_per_channel, model_channels);
   m.number("noise_floor", c.measurement.noise_floor, 0.0, kInf);
-  readPerChannel(m, "r_relative", c.measurement, c.measurement.r_relative,
-                 c.measurement.r_relative_per_channel, model_channels);
-  m.number("r_floor", c.measurement.r_floor, 0.0, kInf, true);
-  std::string r_rule = c.measurement.r_rule == NoiseRule::kSensor ? "sensor" : "paper";
+  // The filters' R: measurement.r_* and sensor_std, the NoiseModel's fields.
+  NoiseModel& noise = c.measurement.noise;
+  std::vector<double> r_relative_per_channel;
+  readPerChannel(m, "r_relative", c.measurement, noise.r_relative, r_relative_per_channel,
+                 model_channels);
+  noise.channel_relative = Eigen::Map<const Eigen::VectorXd>(
+      r_relative_per_channel.data(), static_cast<Eigen::Index>(r_relative_per_channel.size()));
+  m.number("r_floor", noise.r_floor, 0.0, kInf, true);
+  std::string r_rule = noise.rule == NoiseRule::kSensor ? "sensor" : "paper";
   m.text("r_rule", r_rule);
   if (r_rule != "paper" && r_rule != "sensor") m.fail("r_rule", "'" + r_rule + "'", "paper or sensor");
-  c.measurement.r_rule = r_rule == "sensor" ? NoiseRule::kSensor : NoiseRule::kPaper;
-  m.numberList("sensor_std", c.measurement.sensor_std, 0, known.size());
-  if (c.measurement.sensor_std.size() == 1) c.measurement.sensor_std.resize(known.size(), c.measurement.sensor_std[0]);
+  noise.rule = r_rule == "sensor" ? NoiseRule::kSensor : NoiseRule::kPaper;
+  std::vector<double> sensor_std;
+  m.numberList("sensor_std", sensor_std, 0, known.size());
+  if (sensor_std.size() == 1) sensor_std.resize(known.size(), sensor_std[0]);
   // One per selected channel (in measurement.channels' order): the model's
   // order, the channels not selected at the largest given (never used).
-  if (c.measurement.sensor_std.size() == c.measurement.channels.size()) {
-    c.measurement.sensor_std = inModelOrder(c.measurement.sensor_std, c.measurement.channels,
-                                            model_channels);
+  if (sensor_std.size() == c.measurement.channels.size()) {
+    sensor_std = inModelOrder(sensor_std, c.measurement.channels, model_channels);
   }
-  if (c.measurement.r_rule == NoiseRule::kSensor) {
-    if (c.measurement.sensor_std.size() != known.size()) {
-      m.fail("sensor_std", c.measurement.sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(c.measurement.sensor_std.size()),
+  if (noise.rule == NoiseRule::kSensor) {
+    if (sensor_std.size() != known.size()) {
+      m.fail("sensor_std", sensor_std.empty() ? "(absent)" : "a list of " + std::to_string(sensor_std.size()),
              "with r_rule sensor: one absolute std per channel of measurement.channels, or per channel " + channel_list + " (or one for all)");
     }
-    for (double v : c.measurement.sensor_std) {
+    for (double v : sensor_std) {
       if (!(v > 0.0)) m.fail("sensor_std", std::to_string(v), "positive standard deviations (m, m/s)");
     }
   }
+  noise.channel_std = Eigen::Map<const Eigen::VectorXd>(
+      sensor_std.data(), static_cast<Eigen::Index>(sensor_std.size()));
   m.finish();
 
   readTruth(root.map("truth"), c);

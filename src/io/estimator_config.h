@@ -67,15 +67,13 @@ struct MeasurementConfig {
   double travel_blend = 0.0;
   double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
   double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
-  // Filter R (see NoiseModel): paper R_jj = max(r_floor, (r_relative z_obs,j)^2);
-  // sensor R_jj = sensor_std_c^2 + (r_relative z_obs,j)^2.
-  NoiseRule r_rule = NoiseRule::kPaper;
-  double r_relative = 0.01;
-  double r_floor = 1e-12;
-  std::vector<double> sensor_std;  // sensor rule: absolute std per channel (the model's order)
-  // A list in the YAML: one value per channel (the model's order here; empty =
-  // the scalar above for every channel).
-  std::vector<double> noise_relative_per_channel, r_relative_per_channel;
+  // noise_relative as a list in the YAML: one value per channel (the model's
+  // order here; empty = noise_relative for every channel).
+  std::vector<double> noise_relative_per_channel;
+  // The filters' R (NoiseModel), from measurement.r_rule (rule), r_relative
+  // (r_relative, or a list: channel_relative), r_floor and sensor_std
+  // (channel_std); per channel vectors in the model's channel order.
+  NoiseModel noise;
   // The model's readings: the zero convention, and readings kept as states
   // when the convention or a selected channel (IMU) needs them.
   ReadingSettings readings(const ModelDescription& model) const;

@@ -189,7 +189,7 @@ void checkPrediction(const EstimatorConfig& c, const MeasurementSeries& series,
                      const Eigen::VectorXd& mean, OfflineResult* r) {
   if (!c.health.predictive_check || series.empty() || !mean.allFinite()) return;
   r->predictive = posteriorPredictiveCheck(model, mapping.fullParameters(mean), series,
-                                           makeNoiseModel(c), c.integration, mapping.count(),
+                                           c.measurement.noise, c.integration, mapping.count(),
                                            c.health.nis_confidence);
   if (r->predictive.outside) {
     r->healthy = false;
@@ -248,7 +248,7 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
              std::shared_ptr<const MechanicalModel> model, const ProgressCallback& progress,
              const CoarseGridCache* cache, OfflineResult* r) {
   const ReferencePosterior p = computeReferencePosterior(
-      *model, ParameterMapping(*model, c.uncertain), series, makeNoiseModel(c), c.integration,
+      *model, ParameterMapping(*model, c.uncertain), series, c.measurement.noise, c.integration,
       makeReferenceSettings(c), cache, progress);
   summarise(c, p.mean, p.stddev, r);
   r->records.push_back({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time,
@@ -267,7 +267,7 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
 BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
                               const MeasurementSeries& series, const std::vector<double>& alphas) {
   BatchOutcome o;
-  o.result = batchUpdateRestarted(propagator, series, makeNoiseModel(c), c.update, alphas,
+  o.result = batchUpdateRestarted(propagator, series, c.measurement.noise, c.update, alphas,
                                   c.safeguards.support, c.es_mda);
   const BatchResult& b = o.result;
   o.healthy = b.finite && b.forecast.ok;
@@ -281,7 +281,7 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
   if (c.health.predictive_check && !series.empty() && b.mean.allFinite()) {
     const ParameterMapping& map = propagator.mapping();
     o.predictive = posteriorPredictiveCheck(propagator.model(), map.fullParameters(b.mean), series,
-                                            makeNoiseModel(c), c.integration, map.count(),
+                                            c.measurement.noise, c.integration, map.count(),
                                             c.health.nis_confidence);
     if (o.predictive.outside) {
       o.healthy = false;

@@ -52,7 +52,7 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
                       "channel to predict (the suspension readings are its inputs)");
   }
   // Each input's noise by the config's rule: an absolute and a relative part.
-  const NoiseModel noise = makeNoiseModel(c);
+  const NoiseModel& noise = c.measurement.noise;
   absolute_.resize(static_cast<Eigen::Index>(inputs.size()));
   relative_.resize(absolute_.size());
   for (std::size_t i = 0; i < inputs.size(); ++i) {

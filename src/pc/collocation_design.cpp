@@ -68,7 +68,7 @@ PointSequence pointSequenceFromString(const std::string& name) {
                               "' (accepted: halton, scrambled_halton, hammersley, gauss, smolyak)");
 }
 
-DesignRuleBreach designRuleBreach(PointSequence sequence, int count, ProjectionMethod projection,
+SettingBreach designRuleBreach(PointSequence sequence, int count, ProjectionMethod projection,
                                   int dimension, int order, std::size_t terms) {
   const bool quadrature_rule =
       sequence == PointSequence::kGauss || sequence == PointSequence::kSmolyak;
@@ -120,9 +120,9 @@ CollocationDesign::CollocationDesign(const PolynomialBasis& basis, PointSequence
     throw std::invalid_argument("collocation design: point count must be positive, got " +
                                 std::to_string(count));
   }
-  const DesignRuleBreach breach = designRuleBreach(sequence, count, projection, n, basis.order(),
-                                                   static_cast<std::size_t>(s));
-  if (!breach.setting.empty()) {
+  const SettingBreach breach = designRuleBreach(sequence, count, projection, n, basis.order(),
+                                                static_cast<std::size_t>(s));
+  if (breach.broken()) {
     throw std::invalid_argument("collocation design: " + breach.setting + " " + breach.value +
                                 ", needs " + breach.needs);
   }

@@ -6,6 +6,7 @@
 #include <string>
 
 #include "pc_ekf/pc/polynomial_basis.h"
+#include "pc_ekf/pc/setting_breach.h"
 
 namespace pc_ekf {
 
@@ -42,19 +43,14 @@ std::string toString(ProjectionMethod m);
 ProjectionMethod projectionMethodFromString(
     const std::string& name);  // throws std::invalid_argument
 
-// A rule of the design that its settings break: which setting ("projection",
-// "level" or "points": the collocation: keys), its value and what the rule
-// needs; an empty `setting` when none is broken.
-struct DesignRuleBreach {
-  std::string setting, value, needs;
-};
 // The rules the settings of a design must keep for a basis of `terms` terms
 // of total degree `order` in `dimension` germs: the quadrature projection
 // needs a quadrature rule (gauss or smolyak), smolyak's quadrature projection
 // a level of at least the order, and the least squares Q >= S (gauss: count
-// nodes per germ). CollocationDesign throws on the first one broken; the
-// config parser names the key.
-DesignRuleBreach designRuleBreach(PointSequence sequence, int count, ProjectionMethod projection,
+// nodes per germ). The breach's setting: "projection", "level" or "points"
+// (the collocation: keys). CollocationDesign throws on the first one broken;
+// the config parser names the key.
+SettingBreach designRuleBreach(PointSequence sequence, int count, ProjectionMethod projection,
                                   int dimension, int order, std::size_t terms);
 
 class CollocationDesign {

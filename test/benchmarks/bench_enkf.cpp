@@ -85,7 +85,7 @@ CaseResult runCase(int samples) {
     const MeasurementSeries data = synthesizeFromConfig(s.config, *s.model, seed);
     const double p0 = wallSeconds();
     const ReferencePosterior ref = computeReferencePosterior(
-        *s.model, mapping, data, makeNoiseModel(s.config), s.config.integration, ps, &cache);
+        *s.model, mapping, data, s.config.measurement.noise, s.config.integration, ps, &cache);
     out.posterior_seconds += wallSeconds() - p0;
     const FilterRun pc = runPc(s, data);
     out.pc_error += squaredError(pc.mean, ref) / count;

@@ -83,7 +83,7 @@ void BM_McmcReferenceN11(benchmark::State& state) {
   McmcReference ref;
   for (auto _ : state) {
     ref =
-        runMcmcReference(*s.model, mapping, s.series, makeNoiseModel(c), c.integration, 2, starts,
+        runMcmcReference(*s.model, mapping, s.series, c.measurement.noise, c.integration, 2, starts,
                          ms, [](const std::string& m) { std::fprintf(stderr, "%s\n", m.c_str()); });
   }
   std::printf(

@@ -15,7 +15,7 @@ void referencePosterior(benchmark::State& state, const Scenario& s) {
   double wall = 0.0, cpu = 0.0;
   for (auto _ : state) {
     const double w0 = wallSeconds(), c0 = processCpuSeconds();
-    p = computeReferencePosterior(*s.model, mapping, s.series, makeNoiseModel(s.config),
+    p = computeReferencePosterior(*s.model, mapping, s.series, s.config.measurement.noise,
                                   s.config.integration, ps);
     wall = wallSeconds() - w0;
     cpu = processCpuSeconds() - c0;

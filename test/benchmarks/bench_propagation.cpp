@@ -252,7 +252,7 @@ const ReferencePosterior& exactPosterior() {
     ReferencePosteriorSettings ps = makeReferenceSettings(s.config);
     ps.threads = 2;
     return computeReferencePosterior(*s.model, ParameterMapping(*s.model, s.config.uncertain),
-                                     s.series, makeNoiseModel(s.config), s.config.integration, ps);
+                                     s.series, s.config.measurement.noise, s.config.integration, ps);
   }();
   return p;
 }

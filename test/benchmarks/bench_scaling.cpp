@@ -151,7 +151,7 @@ void BM_WholeSet(benchmark::State& state) {
   const Scenario s = makeScenario(paperConfig(samples));
   const PcPropagator& prop = *s.propagator;
   const Eigen::MatrixXd theta = prop.priorState().bottomRows(prop.parameterCount());
-  const NoiseModel noise = makeNoiseModel(s.config);
+  const NoiseModel& noise = s.config.measurement.noise;
   const std::vector<double> times = sampleTimes(s.series);
   const int repeats = samples >= 100000 ? 1 : 3;
   double simulate = INFINITY, record = INFINITY, update = INFINITY;

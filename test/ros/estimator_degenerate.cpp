@@ -45,8 +45,8 @@ TEST(EstimatorDegenerate, PriorOutsideThePhysicalDomainIsRefusedAtStart) {
 // before the sample is kept and the message says why.
 TEST(EstimatorDegenerate, SingularInnovationCovarianceKeepsTheStateBeforeTheSample) {
   EstimatorConfig c = speedBump();
-  c.measurement.r_relative = 0.0;
-  c.measurement.r_floor = 1e-300;
+  c.measurement.noise.r_relative = 0.0;
+  c.measurement.noise.r_floor = 1e-300;
   const auto propagator = makePropagator(c, makeModel(c, makeRoad(c)));
   EstimatorRun run(c, propagator, false);
   const ParameterEstimate prior = run.priorEstimate(ros::Time(0, 0));

@@ -201,7 +201,7 @@ TEST(PredictiveCheck, StatisticIsTheNormalisedResidualSumOfSquares) {
   MeasurementSeries data = synthesizeFromConfig(c, *model, 1);
   const auto sim = simulateChannels(*model, params, sampleTimes(data), c.integration);
   double expected = 0.0;
-  const NoiseModel noise = makeNoiseModel(c);
+  const NoiseModel& noise = c.measurement.noise;
   for (std::size_t k = 0; k < data.size(); ++k) {
     for (Eigen::Index i = 0; i < data[k].values.size(); ++i) {
       data[k].values[i] = sim[k](data[k].channels[i], 0) + 1e-4 * (i + 1);

@@ -65,7 +65,7 @@ TEST(RidgeReference, ShippedSettingsMatchTheConvergedReference) {
   ms.chains = 4;
   ms.samples = 5000;
   const McmcReference ref =
-      runMcmcReference(*model, mapping, series, makeNoiseModel(shipped), shipped.integration, 2,
+      runMcmcReference(*model, mapping, series, shipped.measurement.noise, shipped.integration, 2,
                        {Eigen::VectorXd::Zero(mapping.count())}, ms);
   std::printf("reference: M %.2f +- %.2f kg, d_CG %.4f +- %.4f m, R-hat <= %.4f, ESS >= %.0f, "
               "%ld simulations, %.1f s\n",

@@ -192,6 +192,24 @@ TEST(Relinearize, WorkingPriorHasTheAskedMomentsInsideThePriorSupport) {
 // m_q = P_q (Q^-1 q + D y); from the prior (m0, P0), P = (P0^-1 + D)^-1,
 // m = P (P0^-1 m0 + D y). The correction turns the first into the second,
 // also when D leaves a direction unread (a ridge only the prior bounds).
+// The rules the filter and the parser share: the breach names the setting.
+TEST(Relinearize, RulesNameTheBrokenSetting) {
+  RelinearizeSettings s;
+  s.shrink = 0.01;
+  s.width = 20.0;
+  EXPECT_FALSE(relinearizeBreach(s).broken());  // 0.2 < 1
+  s.shrink = 0.1;                               // 0.1 x 20 = 2: a restart would widen
+  EXPECT_EQ(relinearizeBreach(s).setting, "width");
+  s.shrink = 1.0;
+  EXPECT_EQ(relinearizeBreach(s).setting, "shrink");
+  s.shrink = 0.01;
+  s.width = 0.0;
+  EXPECT_EQ(relinearizeBreach(s).setting, "width");
+  s.shrink = 0.0;  // off: any width > 0
+  s.width = 1e9;
+  EXPECT_FALSE(relinearizeBreach(s).broken());
+}
+
 TEST(PriorCorrection, SwapsTheWorkingPriorForThePriorInClosedForm) {
   Eigen::Matrix3d d;  // rank 2: (1, 1, 0) / sqrt(2) is unread
   const Eigen::Vector3d u(1.0, -1.0, 0.0), w(0.0, 0.0, 1.0);
@@ -240,11 +258,11 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
       "         es_mda: {alphas: [2, 2], restarts: 3, width: 1.5}}\n"
       "health: {innovation_gate: 1e-6, predictive_check: false}\n",
       "t.yaml");
-  EXPECT_EQ(c.measurement.r_rule, NoiseRule::kSensor);
+  EXPECT_EQ(c.measurement.noise.rule, NoiseRule::kSensor);
   // One per model channel: the four given for u1 u2 v1 v2, the IMU channels
   // (not selected) at the largest.
-  EXPECT_EQ(c.measurement.sensor_std,
-            (std::vector<double>{1e-3, 1e-3, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2}));
+  EXPECT_EQ(c.measurement.noise.channel_std,
+            (Eigen::VectorXd(7) << 1e-3, 1e-3, 1e-2, 1e-2, 1e-2, 1e-2, 1e-2).finished());
   EXPECT_EQ(c.safeguards.support, SupportRule::kIgnore);
   EXPECT_EQ(c.safeguards.drift, Eigen::Vector2d(2.0, 0.0));
   EXPECT_EQ(c.safeguards.reopen.mode, ReopenMode::kPrior);
@@ -260,7 +278,7 @@ TEST(SafeguardConfig, KeysParsedAndBadValuesNamed) {
   EXPECT_FALSE(c.health.predictive_check);
   // Defaults: the paper's rule, damping on, no drift, no re-opening, gate off.
   const EstimatorConfig d = parseConfigString(kUncertain, "d.yaml");
-  EXPECT_EQ(d.measurement.r_rule, NoiseRule::kPaper);
+  EXPECT_EQ(d.measurement.noise.rule, NoiseRule::kPaper);
   EXPECT_EQ(d.safeguards.support, SupportRule::kDamp);
   EXPECT_EQ(d.safeguards.drift.size(), 0);
   EXPECT_EQ(d.safeguards.reopen.mode, ReopenMode::kOff);

@@ -66,7 +66,7 @@ TEST(Config, MinimalFileTakesDefaults) {
   EXPECT_EQ(c.uncertain[1].germ.family, GermFamily::kBeta);
   EXPECT_EQ(c.truth.xi.size(), 2u);
   EXPECT_EQ(c.measurement.channels.size(), 4u);
-  EXPECT_DOUBLE_EQ(c.measurement.r_floor, 1e-12);
+  EXPECT_DOUBLE_EQ(c.measurement.noise.r_floor, 1e-12);
 }
 
 TEST(Config, NegativeMassIsRefusedNamingTheKey) {
