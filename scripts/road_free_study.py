@@ -139,6 +139,10 @@ def car_config_text(road, duration, zero, vehicle, load, seed, accel_y=True):
         imu = imu.replace("accel_y, ", "").replace("0.03, 0.03, 0.002", "0.03, 0.002")
         imu = imu.replace("0.01, 0.0, 0.0, 0.0, 0.0]", "0.01, 0.0, 0.0, 0.0]")
     text = text[:start] + "\nroad:\n  source: none\n\n" + imu + text[end:]
+    if "\ntruth:" in text:  # the file's own truth (its sensors' floors) gives way to this one
+        t0 = text.index("\ntruth:")
+        t1 = text.index("\n\n", t0 + 1)
+        text = text[:t0] + text[t1:]
     mass, x, y = load
     xi = [(mass / 200.0 - 1.0) / 0.5, (x / 1.3 - 1.0) / 0.4, (y / 0.75 - 1.0) / 0.25]
     text += "sampling:\n  samples: %d\n  duration: %.1f\n" % (int(200 * duration), duration)
