@@ -54,16 +54,14 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
     }
   }
   out.z_coeffs = propagator.project(values, usable, report);
-  out.variances = noise.stackedVariances(series);
+  out.variances.resize(rows);
   row = 0;
   for (const Measurement& m : series) {
     const Eigen::Index k = m.values.size();
     const NoiseWhitening white(noise, m);
-    if (white.active()) {
-      white.whiten(out.z.segment(row, k));
-      white.whiten(out.z_coeffs.middleRows(row, k));
-      out.variances.segment(row, k).setOnes();
-    }
+    white.whiten(out.z.segment(row, k));
+    white.whiten(out.z_coeffs.middleRows(row, k));
+    out.variances.segment(row, k) = white.variances();
     row += k;
   }
   return out;

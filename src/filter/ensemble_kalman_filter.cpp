@@ -83,12 +83,10 @@ EnkfStep EnsembleKalmanFilter::process(const Measurement& m) {
     Eigen::MatrixXd hx = h * x.topRows(ns);
     // Noise correlated between channels: the update on whitened readings.
     const NoiseWhitening white(settings_.noise, m);
-    Eigen::VectorXd z = m.values, r = settings_.noise.variances(m);
-    if (white.active()) {
-      white.whiten(hx);
-      white.whiten(z);
-      r.setOnes();
-    }
+    Eigen::VectorXd z = m.values;
+    white.whiten(hx);
+    white.whiten(z);
+    const Eigen::VectorXd& r = white.variances();
     const Eigen::VectorXd xm = x.rowwise().mean(), zm = hx.rowwise().mean();
     const Eigen::MatrixXd a = x.colwise() - xm, y = hx.colwise() - zm;
     const double scale = std::sqrt(double(ne - 1));

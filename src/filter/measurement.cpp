@@ -51,19 +51,21 @@ Eigen::VectorXd NoiseModel::variances(const Measurement& m) const {
   return v;
 }
 
-NoiseWhitening::NoiseWhitening(const NoiseModel& noise, const Measurement& m) {
+NoiseWhitening::NoiseWhitening(const NoiseModel& noise, const Measurement& m)
+    : variances_(noise.variances(m)) {
   const Eigen::Index k = m.values.size();
   if (m.extra_covariance.size() == 0 || k < 2) return;
   Eigen::MatrixXd r = m.extra_covariance;
   r.diagonal().setZero();
   if (r.isZero(0.0)) return;
-  r.diagonal() = noise.variances(m);
+  r.diagonal() = variances_;
   const Eigen::LLT<Eigen::MatrixXd> llt(r);
   if (llt.info() != Eigen::Success) {
     throw std::invalid_argument("noise: the readings' covariance at t = " + std::to_string(m.time) +
                                 " s is not positive definite");
   }
   l_ = llt.matrixL();
+  variances_.setOnes();
   active_ = true;
 }
 

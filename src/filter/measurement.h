@@ -50,24 +50,26 @@ struct NoiseModel {
   Eigen::VectorXd stackedVariances(const std::vector<Measurement>& series) const;
 };
 
-// One sample's readings whose noise is correlated between channels
-// (extra_covariance off its diagonal): R = L L' (Cholesky), and whiten()
-// replaces rows (values, or predictions, one row per reading) by L^-1 rows.
-// Whitened, the readings have independent unit noise, and a Kalman update,
-// NIS or likelihood on them equals the one with the full R; the filters
-// whiten such samples and take R = I there. Inactive when R is diagonal
-// (nothing to do: the filters keep the diagonal R).
+// One sample's R as the estimators take it. When its readings' noise is
+// correlated between channels (extra_covariance off its diagonal), R = L L'
+// (Cholesky) and whiten() replaces rows (values, or predictions, one row per
+// reading) by L^-1 rows: whitened, the readings have independent unit noise,
+// and a Kalman update, NIS or likelihood on them equals the one with the full
+// R; variances() is then 1. Otherwise (inactive) whiten() leaves the rows
+// alone and variances() is R's diagonal, noise.variances(m).
 class NoiseWhitening {
  public:
   NoiseWhitening(const NoiseModel& noise, const Measurement& m);
   bool active() const { return active_; }
+  const Eigen::VectorXd& variances() const { return variances_; }
   template <class Rows>
   void whiten(const Eigen::MatrixBase<Rows>& rows) const {
-    l_.triangularView<Eigen::Lower>().solveInPlace(rows);
+    if (active_) l_.triangularView<Eigen::Lower>().solveInPlace(rows);
   }
 
  private:
   Eigen::MatrixXd l_;
+  Eigen::VectorXd variances_;
   bool active_ = false;
 };
 

@@ -394,16 +394,10 @@ StepResult OneStepFilter::step(const Measurement& m) {
     }
     x_before_ = x_;
     const NoiseWhitening white(settings_.noise, m);
-    if (white.active()) {
-      Eigen::VectorXd values = m.values;
-      white.whiten(values);
-      white.whiten(z_coeffs_);
-      r.update = pcKalmanUpdate(x_, z_coeffs_, values, Eigen::VectorXd::Ones(values.size()),
-                                settings_.rule);
-    } else {
-      r.update = pcKalmanUpdate(x_, z_coeffs_, m.values, settings_.noise.variances(m),
-                                settings_.rule);
-    }
+    Eigen::VectorXd values = m.values;
+    white.whiten(values);
+    white.whiten(z_coeffs_);
+    r.update = pcKalmanUpdate(x_, z_coeffs_, values, white.variances(), settings_.rule);
     safeguard(r);
   } else {
     r.update.finite = x_.allFinite();

@@ -33,9 +33,7 @@ Eigen::MatrixXd whitenedResiduals(const MeasurementSeries& series, const NoiseMo
   for (std::size_t k = 0; k < series.size(); ++k) {
     const Measurement& m = series[k];
     const NoiseWhitening white(noise, m);
-    const Eigen::VectorXd scale = white.active()
-                                      ? Eigen::VectorXd(Eigen::VectorXd::Ones(m.values.size()))
-                                      : Eigen::VectorXd(noise.variances(m).cwiseSqrt().cwiseInverse());
+    const Eigen::VectorXd scale = white.variances().cwiseSqrt().cwiseInverse();
     const Eigen::Index first = row;
     for (std::size_t c = 0; c < m.channels.size(); ++c, ++row) {
       const int ch = m.channels[c];
@@ -45,7 +43,7 @@ Eigen::MatrixXd whitenedResiduals(const MeasurementSeries& series, const NoiseMo
       }
       r.row(row) = scale[c] * (m.values[c] - channels[k].row(ch).array());
     }
-    if (white.active()) white.whiten(r.middleRows(first, row - first));
+    white.whiten(r.middleRows(first, row - first));
   }
   return r;
 }

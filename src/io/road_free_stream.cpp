@@ -86,8 +86,6 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     inputs_->setNoiseCorrelation(b.u, std::min(0.999, a + shared / (absolute_[b.u] * absolute_[b.u])));
   }
   accel_z_ = type.description().channelIndex("accel_z");
-  inherited_ = Eigen::MatrixXd::Zero(static_cast<Eigen::Index>(channels.size()),
-                                     static_cast<Eigen::Index>(channels.size()));
 }
 
 std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
@@ -113,8 +111,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   // The sample's own inherited variance; the load it is weighed at (tare)
   // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
-  inherited_ = inherited_at_(static_cast<std::size_t>(samples_ - 1));
-  o.extra_covariance = inherited_(o.channels, o.channels);
+  o.extra_covariance = inherited_at_(static_cast<std::size_t>(samples_ - 1))(o.channels, o.channels);
   *out = std::move(o);
   return "";
 }

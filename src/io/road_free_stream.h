@@ -71,7 +71,6 @@ class RoadFreeStream {
   long accel_z_count_ = 0;
   long samples_ = 0;
   MechanicalModel::SampleInputNoise inherited_at_;
-  Eigen::MatrixXd inherited_;  // between model channels
 };
 
 // A whole record through the stream: the model and the outputs. Throws
