@@ -2,7 +2,8 @@
 """Road-free estimation on roads the estimator is not told: coverage, silent
 runs and spreads of M and d_CG (config/vehicle_imu.yaml, road.source none).
 
-  /usr/bin/python3 scripts/road_free_study.py BIN_DIR [--seeds N] [--methods one_step,es_mda]
+  /usr/bin/python3 scripts/road_free_study.py BIN_DIR [--seeds N [--first-seed K]]
+      [--methods one_step,es_mda]
       [--full-car] [--model-errors] [--roads deck,ISO]
 
 --full-car: the same on config/full_car_live.yaml made road-free (IMU
@@ -159,6 +160,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("bin")
     ap.add_argument("--seeds", type=int, default=1)
+    ap.add_argument("--first-seed", type=int, default=1,
+                    help="seeds first-seed .. first-seed + seeds - 1 (roads and noise)")
     ap.add_argument("--methods", default="one_step,es_mda")
     ap.add_argument("--model-errors", action="store_true",
                     help="instead: a spring 15 %% beyond its tolerance (+25 %%) and the IMU "
@@ -190,7 +193,7 @@ def main():
                     sm, sd = [], []
                     for vehicle in (False, True):
                         for mass, position in LOADS:
-                            for seed in range(1, a.seeds + 1):
+                            for seed in range(a.first_seed, a.first_seed + a.seeds):
                                 d, p = estimate(exe, tmp, config_text(road_text(name, seed, tmp), duration, zero, vehicle,
                                                                       mass, position, seed),
                                                 method, seed)
@@ -227,7 +230,7 @@ def full_car(a):
                     sm, sy = [], []
                     for vehicle in (False, True):
                         for load in CAR_LOADS:
-                            for seed in range(1, a.seeds + 1):
+                            for seed in range(a.first_seed, a.first_seed + a.seeds):
                                 d, p = estimate(exe, tmp, car_config_text(
                                     road_text(name, seed, tmp), duration, zero, vehicle, load, seed,
                                     not a.without_accel_y), method, seed)
