@@ -44,7 +44,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"collocation.threads", "integer", "0", "[0, 1024]", "forecast threads, 0 = the machine's cores (results identical for any count; designs under 48 points stay on one thread)"},
       {"collocation.loo_warning", "number", "0.1", "[0, inf)", "relative leave-one-out error of the projection above which a sample is flagged (warning only)"},
       // the road
-      {"road.source", "choice", "speed_bump", "speed_bump, sine, series, topic, course, iso8608, profile or none", "where the road comes from; topic: the node's `road/profile` or `road/heights`; none: no road known (road-free estimation, [method.md §4.10](method.md#410-road-free-estimation-roadsource-none); estimator_node too, with `filter.relinearize.defer` 0 and no checkpoint)"},
+      {"road.source", "choice", "speed_bump", "speed_bump, sine, series, topic, course, iso8608, profile or none", "where the road comes from; topic: the node's `road/profile` or `road/heights`; none: no road known (road-free estimation, [method.md §4.10](method.md#410-road-free-estimation-roadsource-none); estimator_node too, without a checkpoint)"},
       {"road.speed_kmh", "number", "36", "(0, 1000]", "iso8608 and profile: the driving speed, km/h"},
       {"road.iso8608.class", "choice", "B", "A, B, C, D or E", "ISO 8608 class: Gd(0.1 cycles/m) = 16, 64, 256, 1024, 4096 x 10^-6 m^3"},
       {"road.iso8608.seed", "unsigned", "1", "[0, 2^64)", "phases of the sum of sinusoids"},

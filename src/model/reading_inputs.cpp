@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <stdexcept>
 
 namespace pc_ekf {
@@ -70,6 +71,7 @@ std::string ReadingInputs::append(double t, const double* values) {
              (std::isnan(values[c]) ? "not read yet" : "not finite");
     }
   }
+  std::unique_lock<std::shared_mutex> lock(mutex_);
   series_.append(t, names_.empty() ? std::vector<double>{0.0} : row);
   for (std::size_t c = 0; c < names_.size(); ++c) {
     // The first value from t = 0, as the whole record's.
@@ -82,16 +84,19 @@ std::string ReadingInputs::append(double t, const double* values) {
 }
 
 void ReadingInputs::at(double t, double* out) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
   Eigen::Map<Eigen::VectorXd> values(out, count());
   series_.heights(t, values);
 }
 
 double ReadingInputs::previousTime(double t) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
   const auto it = std::lower_bound(t_.begin(), t_.end(), t);
   return it == t_.begin() ? 0.0 : *(it - 1);
 }
 
 double ReadingInputs::integral(int c, double t) const {
+  std::shared_lock<std::shared_mutex> lock(mutex_);
   const std::vector<double>& col = v_[static_cast<std::size_t>(c)];
   const std::vector<double>& cum = cum_[static_cast<std::size_t>(c)];
   if (t <= t_.front()) return col[0] * std::max(t, 0.0);

@@ -6,6 +6,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <shared_mutex>
 #include <string>
 #include <vector>
 
@@ -25,8 +26,10 @@ class ReadingInputs {
   explicit ReadingInputs(std::vector<std::string> names);
   // values[c]: input c at t (NaN = not read: held at its last value). Returns
   // "" or why the sample cannot be taken (t not after the last sample, an
-  // input not read yet or infinite); then nothing changes. Not thread-safe:
-  // no model may read the inputs while a sample is appended.
+  // input not read yet or infinite); then nothing changes. at(),
+  // previousTime() and integral() may run on other threads meanwhile (a
+  // deferred re-linearisation's worker reads the samples before the one
+  // being appended); the other readers belong to the appending thread.
   std::string append(double t, const double* values);
   bool empty() const { return t_.empty(); }
   int count() const { return static_cast<int>(names_.size()); }
@@ -55,6 +58,7 @@ class ReadingInputs {
   std::vector<std::vector<double>> cum_;  // [input][sample]: integral up to t_k
   SampledRoad series_;                    // v_ by time, for the interpolation
   std::vector<double> rho_;               // [input]: lag-1 noise correlation
+  mutable std::shared_mutex mutex_;       // append() against at(), previousTime(), integral()
 };
 
 }  // namespace pc_ekf

@@ -72,12 +72,6 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   joints_ = suspensionJoints(*config_.model_type, config_.node.joint_names);
   // Built now so that a bad road file or collocation design is a start-up error.
   if (config_.road.source == RoadSource::kNone) {
-    if (config_.safeguards.relinearize.defer > 0.0) {
-      throw ConfigError(config_.source +
-                        ": key 'filter.relinearize.defer': road.source none re-linearises on "
-                        "the node's thread (a deferred re-run would read inputs the node is "
-                        "appending to); set it to 0");
-    }
     startRoadFree();
     prior_propagator_ = analytic_propagator_;
   } else if (config_.road.source == RoadSource::kTopic) {
