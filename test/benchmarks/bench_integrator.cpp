@@ -21,8 +21,8 @@ Eigen::MatrixXd collocationParameters(const Scenario& s) {
 void BM_RightHandSide(benchmark::State& state) {
   const Scenario s = makeScenario(paperConfig(100));
   const int q = static_cast<int>(state.range(0));
-  Eigen::MatrixXd params(16, q);
   const Eigen::MatrixXd colloc = collocationParameters(s);
+  Eigen::MatrixXd params(colloc.rows(), q);
   for (int i = 0; i < q; ++i) params.col(i) = colloc.col(i % colloc.cols());
   const auto batch = s.model->prepare(params);
   std::mt19937_64 rng(1);
