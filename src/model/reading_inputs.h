@@ -58,7 +58,10 @@ class ReadingInputs {
   std::vector<std::vector<double>> cum_;  // [input][sample]: integral up to t_k
   SampledRoad series_;                    // v_ by time, for the interpolation
   std::vector<double> rho_;               // [input]: lag-1 noise correlation
-  mutable std::shared_mutex mutex_;       // append() against at(), previousTime(), integral()
+  // append() against at(), previousTime(), integral(). A lock, not the copies
+  // a topic road hands its re-runs (RoadSnapshots): these inputs keep the
+  // whole record, so a copy per sample would cost O(samples) each.
+  mutable std::shared_mutex mutex_;
 };
 
 }  // namespace pc_ekf
