@@ -76,7 +76,7 @@ PriorSensitivity priorSensitivity(const PcPropagator& propagator, const std::vec
 }
 
 std::string sensitivityTable(const PriorSensitivity& s) {
-  std::string out = "total Sobol indices of the prior forecast over the record (ranked)\n";
+  std::string out = "total Sobol indices of the prior's readings over the record (ranked)\n";
   char buf[64];
   std::snprintf(buf, sizeof(buf), "  %-24s %8s", "parameter", "largest");
   out += buf;
@@ -102,6 +102,9 @@ std::string sensitivityTable(const PriorSensitivity& s) {
       out += buf;
     }
     out += "   (leave-one-out share of each channel's variance)\n";
+  }
+  if (!s.expansion.empty()) {
+    out += "  expansion: " + s.expansion + " (" + std::to_string(s.simulations) + " simulations)\n";
   }
   return out;
 }

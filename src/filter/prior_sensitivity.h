@@ -25,6 +25,10 @@ struct PriorSensitivity {
   // the expansion's variance: a missed share of 0.2 leaves every index up to
   // that much low. Empty when the design has no leave-one-out error.
   Eigen::VectorXd unexplained;
+  // How the indices were computed (simulated_sensitivity.h: the basis chosen,
+  // its points) and the model runs it took; empty and 0 for priorSensitivity.
+  std::string expansion;
+  long simulations = 0;
   // Largest total index of parameter i over the channels.
   double largestTotal(int i) const { return total.row(i).maxCoeff(); }
   // Parameters by decreasing largestTotal.

@@ -138,7 +138,7 @@ std::string toJson(const OfflineResult& r) {
                       {"largest_total", r.sensitivity.largestTotal(i)},
                       {"total", per_channel}});
     }
-    j["sensitivity"] = rows;  // ranked, total Sobol indices of the prior forecast
+    j["sensitivity"] = rows;  // ranked, total Sobol indices of the prior's readings
     if (r.sensitivity.unexplained.size() > 0) {
       Json missed = Json::object();
       for (std::size_t c = 0; c < r.sensitivity.channels.size(); ++c) {
@@ -146,6 +146,10 @@ std::string toJson(const OfflineResult& r) {
             r.sensitivity.unexplained(static_cast<Eigen::Index>(c));
       }
       j["sensitivity_unexplained"] = missed;  // leave-one-out share of each channel's variance
+    }
+    if (!r.sensitivity.expansion.empty()) {
+      j["sensitivity_expansion"] = r.sensitivity.expansion;
+      j["sensitivity_simulations"] = r.sensitivity.simulations;
     }
   }
   if (!r.pruned_tolerances.empty()) j["pruned_tolerances"] = r.pruned_tolerances;

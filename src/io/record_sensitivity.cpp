@@ -2,6 +2,7 @@
 
 #include <cstdio>
 
+#include "pc_ekf/filter/simulated_sensitivity.h"
 #include "pc_ekf/io/estimation_setup.h"
 
 namespace pc_ekf {
@@ -17,11 +18,13 @@ std::vector<double> sampleTimes(const MeasurementSeries& series) {
 PriorSensitivity recordSensitivity(const EstimatorConfig& c,
                                    std::shared_ptr<const MechanicalModel> model,
                                    const std::vector<double>& times) {
-  // A prior forecast over the record, as the batch methods': their design
-  // (pc.batch_tolerance_interactions keeps the tolerances' products, which
-  // the total indices count).
-  const auto propagator = makePropagator(batchDesignConfig(c), std::move(model));
-  return priorSensitivity(*propagator, times, channelIndices(c));
+  // Whole-record simulations of the prior (simulated_sensitivity.h), not
+  // the filters' re-projected forecast.
+  const ParameterMapping mapping(*model, c.uncertain);
+  SimulatedSensitivitySettings settings;
+  settings.seed = c.collocation.seed;
+  settings.threads = c.collocation.threads;
+  return simulatedSensitivity(*model, mapping, times, channelIndices(c), c.integration, settings);
 }
 
 EstimatorConfig pruneTolerances(const EstimatorConfig& c, const PriorSensitivity& s,

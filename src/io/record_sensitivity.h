@@ -14,7 +14,8 @@
 namespace pc_ekf {
 
 // Total indices of every uncertain parameter on the config's observed
-// channels over `times` (the prior forecast at those instants).
+// channels over `times`: the prior's whole-record simulations at those
+// instants (simulated_sensitivity.h; points seeded by collocation.seed).
 PriorSensitivity recordSensitivity(const EstimatorConfig& c,
                                    std::shared_ptr<const MechanicalModel> model,
                                    const std::vector<double>& times);

@@ -1,6 +1,8 @@
 #include "pc_ekf/pc/polynomial_basis.h"
 
+#include <algorithm>
 #include <cmath>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -48,6 +50,27 @@ PolynomialBasis::PolynomialBasis(std::vector<GermSpec> germs, int order, BasisTr
   families_.reserve(germs_.size());
   for (const GermSpec& g : germs_) families_.emplace_back(g);
   indices_ = truncatedMultiIndices(dimension(), order_, truncation_);
+}
+
+PolynomialBasis::PolynomialBasis(std::vector<GermSpec> germs, std::vector<std::vector<int>> indices)
+    : germs_(std::move(germs)), order_(0), indices_(std::move(indices)) {
+  if (germs_.empty()) throw std::invalid_argument("PolynomialBasis: no germs");
+  if (indices_.empty()) throw std::invalid_argument("PolynomialBasis: no multi-indices");
+  std::set<std::vector<int>> seen;
+  for (std::size_t j = 0; j < indices_.size(); ++j) {
+    const auto& a = indices_[j];
+    const bool zero = std::all_of(a.begin(), a.end(), [](int e) { return e == 0; });
+    if (a.size() != germs_.size() || (j == 0) != zero ||
+        std::any_of(a.begin(), a.end(), [](int e) { return e < 0; }) || !seen.insert(a).second) {
+      throw std::invalid_argument(
+          "PolynomialBasis: multi-index " + std::to_string(j) +
+          " must have one non-negative exponent per germ (" + std::to_string(germs_.size()) +
+          "), be all zeros exactly when it is the first, and not repeat");
+    }
+    order_ = std::max(order_, *std::max_element(a.begin(), a.end()));
+  }
+  families_.reserve(germs_.size());
+  for (const GermSpec& g : germs_) families_.emplace_back(g);
 }
 
 Eigen::VectorXd PolynomialBasis::evaluate(const Eigen::Ref<const Eigen::VectorXd>& xi) const {

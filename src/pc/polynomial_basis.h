@@ -22,6 +22,11 @@ class PolynomialBasis {
   // Throws std::invalid_argument on empty germs, negative order or a q-norm
   // outside (0, 1].
   PolynomialBasis(std::vector<GermSpec> germs, int order, BasisTruncation truncation = {});
+  // An explicit set of multi-indices (each of germs.size() non-negative
+  // exponents; the first all zeros, no repeats): an anisotropic basis such as
+  // simulated_sensitivity.h chooses. order() is the largest univariate degree.
+  // Throws std::invalid_argument naming the first index that breaks a rule.
+  PolynomialBasis(std::vector<GermSpec> germs, std::vector<std::vector<int>> indices);
 
   int dimension() const { return static_cast<int>(germs_.size()); }
   int order() const { return order_; }
