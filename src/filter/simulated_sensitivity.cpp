@@ -8,6 +8,7 @@
 #include <set>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "pc_ekf/filter/posterior_residual.h"
 #include "pc_ekf/pc/point_sets.h"
@@ -116,6 +117,10 @@ PriorSensitivity simulatedSensitivity(const MechanicalModel& model, const Parame
   const int channel_count = static_cast<int>(channels.size());
   const int samples = static_cast<int>(times.size());
   const std::vector<GermSpec> germs = mapping.germs();
+  // The runs' columns are independent: the same readings on any thread count.
+  const int threads = settings.threads > 0
+                          ? settings.threads
+                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
   // The points and the readings there, extended as larger bases need them
   // (the scrambled sequence is nested: the first Q points never change).
   Eigen::MatrixXd points(0, n), readings(channel_count * samples, 0);
@@ -128,7 +133,7 @@ PriorSensitivity simulatedSensitivity(const MechanicalModel& model, const Parame
                               static_cast<std::uint64_t>(have) + 1),
         germs);
     const std::vector<Eigen::MatrixXd> out = simulateGermChannels(
-        model, mapping, more.transpose(), times, integration, settings.threads, &simulations);
+        model, mapping, more.transpose(), times, integration, threads, &simulations);
     Eigen::MatrixXd block(readings.rows(), more.rows());
     for (int k = 0; k < samples; ++k) {
       for (int c = 0; c < channel_count; ++c) block.row(c * samples + k) = out[k].row(channels[c]);
