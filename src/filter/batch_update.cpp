@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <stdexcept>
 
+#include "pc_ekf/filter/local_covariance.h"
 #include "pc_ekf/filter/prior_correction.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/pc/pc_statistics.h"
@@ -150,6 +151,12 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
     // prior, where a step towards the support's end need not be a model
     // error; a restart that still meets the end is.
     result = std::move(next);
+  }
+  if (restarts.local_covariance && result.finite && result.forecast.ok &&
+      localCovariance(propagator, series, noise, result.coefficients)) {
+    result.mean = pcMean(result.coefficients);
+    result.stddev = pcStddev(result.coefficients);
+    result.local_covariance = true;
   }
   return result;
 }

@@ -24,6 +24,9 @@ struct BatchResult {
   bool finite = true;
   ForecastReport forecast;     // merged over iterations
   double damping = 1.0;        // smallest fraction of an iteration's update applied (support rule)
+  // BatchRestarts::local_covariance: whether the covariance is localCovariance's
+  // (false when it was asked for and a run or a factorisation failed: the passes' stays).
+  bool local_covariance = false;
 };
 
 // Stacked observation coefficients (observations x S) of the parameter
@@ -63,6 +66,10 @@ struct BatchRestarts {
   static constexpr double kMinWidth = 1.0;
   int restarts = 0;  // >= 0
   double width = 2.0;
+  // filter.es_mda.covariance: local: the final result's covariance from the
+  // model's local information at its mean (local_covariance.h), its mean the
+  // passes'. false (passes): the passes' own.
+  bool local_covariance = false;
 };
 BatchResult batchUpdateRestarted(const PcPropagator& propagator, const MeasurementSeries& series,
                                  const NoiseModel& noise, UpdateRule rule,

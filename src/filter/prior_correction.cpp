@@ -2,26 +2,39 @@
 
 namespace pc_ekf {
 
-namespace {
-
-// Covariance of an expansion in units of `scale` (orthonormal basis: the
-// non-constant coefficients' Gram matrix).
 Eigen::MatrixXd scaledCovariance(const Eigen::MatrixXd& c, const Eigen::VectorXd& scale) {
   const Eigen::MatrixXd a = scale.cwiseInverse().asDiagonal() * c.rightCols(c.cols() - 1);
   return a * a.transpose();
 }
 
-}  // namespace
+Eigen::VectorXd priorScale(const Eigen::MatrixXd& prior) {
+  Eigen::VectorXd scale(prior.rows());
+  for (Eigen::Index i = 0; i < prior.rows(); ++i) {
+    const double sd = prior.row(i).tail(prior.cols() - 1).norm();
+    scale[i] = sd > 0.0 ? sd : 1.0;
+  }
+  return scale;
+}
+
+bool mapOntoMoments(Eigen::MatrixXd& coefficients, const Eigen::VectorXd& mean,
+                    const Eigen::MatrixXd& covariance, const Eigen::VectorXd& scale) {
+  const Eigen::LLT<Eigen::MatrixXd> pq(scaledCovariance(coefficients, scale));
+  const Eigen::LLT<Eigen::MatrixXd> pf(covariance);
+  if (pq.info() != Eigen::Success || pf.info() != Eigen::Success) return false;
+  const Eigen::MatrixXd eye = Eigen::MatrixXd::Identity(mean.size(), mean.size());
+  const Eigen::MatrixXd t = Eigen::MatrixXd(pf.matrixL()) * pq.matrixL().solve(eye);
+  const Eigen::MatrixXd rest =
+      scale.cwiseInverse().asDiagonal() * coefficients.rightCols(coefficients.cols() - 1);
+  coefficients.rightCols(coefficients.cols() - 1) = scale.asDiagonal() * (t * rest);
+  coefficients.col(0) = scale.cwiseProduct(mean);
+  return true;
+}
 
 bool correctForPrior(const Eigen::MatrixXd& prior, const Eigen::MatrixXd& working,
                      Eigen::MatrixXd& posterior) {
   const Eigen::Index n = prior.rows();
   // Units of the prior's std: the three covariances span many decades.
-  Eigen::VectorXd scale(n);
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double sd = prior.row(i).tail(prior.cols() - 1).norm();
-    scale[i] = sd > 0.0 ? sd : 1.0;
-  }
+  const Eigen::VectorXd scale = priorScale(prior);
   const Eigen::LLT<Eigen::MatrixXd> p0(scaledCovariance(prior, scale));
   const Eigen::LLT<Eigen::MatrixXd> q(scaledCovariance(working, scale));
   const Eigen::MatrixXd pq_cov = scaledCovariance(posterior, scale);
@@ -46,16 +59,7 @@ bool correctForPrior(const Eigen::MatrixXd& prior, const Eigen::MatrixXd& workin
   // The data's share of the information vector, D m_data = P_q^-1 m_q - Q^-1 q.
   const Eigen::VectorXd b = pq_inv * mean(posterior) - q_inv * mean(working) + p0_inv * mean(prior);
   const Eigen::VectorXd m = p * b;
-  const Eigen::LLT<Eigen::MatrixXd> pf(p);
-  if (pf.info() != Eigen::Success) return false;
-  // T = L_p L_q^-1 maps the coefficients' covariance P_q onto P.
-  const Eigen::MatrixXd lq_inv = pq.matrixL().solve(eye);
-  const Eigen::MatrixXd t = Eigen::MatrixXd(pf.matrixL()) * lq_inv;
-  const Eigen::MatrixXd rest =
-      scale.cwiseInverse().asDiagonal() * posterior.rightCols(posterior.cols() - 1);
-  posterior.rightCols(posterior.cols() - 1) = scale.asDiagonal() * (t * rest);
-  posterior.col(0) = scale.cwiseProduct(m);
-  return true;
+  return mapOntoMoments(posterior, m, p, scale);
 }
 
 }  // namespace pc_ekf

@@ -20,4 +20,17 @@ namespace pc_ekf {
 bool correctForPrior(const Eigen::MatrixXd& prior, const Eigen::MatrixXd& working,
                      Eigen::MatrixXd& posterior);
 
+// Shared with local_covariance.h. Per parameter, the prior's std (1 where it
+// is 0): the units the covariances are handled in (they span many decades).
+Eigen::VectorXd priorScale(const Eigen::MatrixXd& prior);
+// Covariance of an expansion in those units (orthonormal basis: the
+// non-constant coefficients' Gram matrix).
+Eigen::MatrixXd scaledCovariance(const Eigen::MatrixXd& coefficients, const Eigen::VectorXd& scale);
+// Maps the expansion affinely onto mean `mean` and covariance `covariance`
+// (both in units of `scale`), keeping its shape: T = L_P L_Pq^-1 on the
+// non-constant coefficients. False (left as is) when a covariance is not
+// positive definite.
+bool mapOntoMoments(Eigen::MatrixXd& coefficients, const Eigen::VectorXd& mean,
+                    const Eigen::MatrixXd& covariance, const Eigen::VectorXd& scale);
+
 }  // namespace pc_ekf

@@ -106,6 +106,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"filter.es_mda.alphas", "numbers", "[4, 4, 4, 4]", "1 to 100 positive numbers with sum(1/alpha) = 1", "ES-MDA: the inflation of each pass ([method.md §4.5](method.md))"},
       {"filter.es_mda.restarts", "integer", "0", "[0, 100]", "ES-MDA and the whole-set update: re-runs from a working prior around the last result (std = `width` x its std), each reported with the working prior's information replaced by the prior's ([method.md §4.5](method.md)); 0 = one run from the prior"},
       {"filter.es_mda.width", "number", "2", "(1, inf)", "the restarts' working prior std, as a multiple of the last result's std"},
+      {"filter.es_mda.covariance", "choice", "passes", "passes or local", "ES-MDA and the whole-set update: the covariance reported; local: the model's Gauss-Newton information at the passes' mean (J^T R^-1 J by central differences, 2 n + 1 runs of the record) plus the prior's, the mean the passes' ([method.md §4.5](method.md)); passes: the passes' own, which reads a curved posterior ridge's bend as information"},
       {"filter.enkf.members", "integer", "200", "[2, 10000000]", "EnKF ensemble size"},
       {"filter.enkf.seed", "unsigned", "7", "[0, 2^64)", "EnKF seed"},
       {"filter.enkf.update", "choice", "perturbed", "perturbed or square_root", "perturbed observations (baseline) or square_root (EAKF, diagnosis)"},

@@ -261,6 +261,12 @@ void readFilterSections(YamlMapReader& root, EstimatorConfig& c) {
   }
   e.integer("restarts", c.es_mda.restarts, 0, 100);
   e.number("width", c.es_mda.width, BatchRestarts::kMinWidth, kInf, true);
+  std::string covariance = c.es_mda.local_covariance ? "local" : "passes";
+  e.text("covariance", covariance);
+  if (covariance != "passes" && covariance != "local") {
+    e.fail("covariance", "'" + covariance + "'", "passes or local");
+  }
+  c.es_mda.local_covariance = covariance == "local";
   e.finish();
   YamlMapReader k = f.map("enkf");
   k.integer("members", c.enkf.members, EnkfEnsemble::kMinMembers, 10000000);

@@ -272,6 +272,12 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
   const BatchResult& b = o.result;
   o.healthy = b.finite && b.forecast.ok;
   if (!b.forecast.first_problem.empty()) o.warnings.push_back(b.forecast.first_problem);
+  if (c.es_mda.local_covariance && o.healthy && !b.local_covariance) {
+    // Informational: the passes' covariance is reported instead.
+    o.warnings.push_back(
+        "filter.es_mda.covariance local not applied (a run at the mean failed or the "
+        "information was not positive definite): the passes' covariance is reported");
+  }
   if (b.damping < 1.0) {
     o.healthy = false;
     o.warnings.push_back(

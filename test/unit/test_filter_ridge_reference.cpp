@@ -43,7 +43,8 @@ const char* kShipped =
     "  update: square_root\n"
     "  relinearize: {shrink: 0.3, width: 2.0, max_restarts: 10, max_samples: 1000,\n"
     "                prior_correction: true}\n"
-    "  es_mda: {alphas: [32.0, 16.0, 8.0, 4.0, 1.8823529411764706], restarts: 4, width: 1.5}\n";
+    "  es_mda: {alphas: [32.0, 16.0, 8.0, 4.0, 1.8823529411764706], restarts: 4, width: 1.5,\n"
+    "           covariance: local}\n";
 
 const char* kPlain =
     "filter:\n"

@@ -113,6 +113,17 @@ TEST(Config, WrongSizeListIsRefusedNamingTheKey) {
   EXPECT_NE(alphas.find("filter.es_mda.alphas"), std::string::npos) << alphas;
 }
 
+TEST(Config, EsMdaCovarianceIsPassesOrLocal) {
+  const std::string e =
+      errorOf(std::string("filter: {es_mda: {covariance: exact}}\n") + kMinimal);
+  EXPECT_NE(e.find("filter.es_mda.covariance"), std::string::npos) << e;
+  EXPECT_NE(e.find("passes or local"), std::string::npos) << e;
+  EXPECT_FALSE(parseConfigString(kMinimal, "ok.yaml").es_mda.local_covariance);
+  EXPECT_TRUE(parseConfigString(std::string("filter: {es_mda: {covariance: local}}\n") + kMinimal,
+                                "ok.yaml")
+                  .es_mda.local_covariance);
+}
+
 TEST(Config, TooFewCollocationPointsAreRefusedNamingTheKey) {
   const std::string e = errorOf(std::string("collocation: {points: 10}\n") + kMinimal);
   EXPECT_NE(e.find("collocation.points"), std::string::npos) << e;
