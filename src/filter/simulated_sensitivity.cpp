@@ -176,6 +176,7 @@ PriorSensitivity simulatedSensitivity(const MechanicalModel& model, const Parame
     const std::vector<int> leading(ranked.begin(), ranked.begin() + std::min(k, n));
     for (int p : settings.lead_orders) {
       auto indices = leadingGermIndices(n, leading, p, settings.mixed_order, settings.other_degree);
+      if (static_cast<int>(indices.size()) > settings.max_terms) continue;
       std::string label = "degree " + std::to_string(p) + " in";
       for (int g : leading) label += " " + mapping.names()[g];
       if (static_cast<int>(leading.size()) < n) {

@@ -33,6 +33,10 @@ struct SimulatedSensitivitySettings {
   int mixed_order = 3;                    // degree of a term with another germ
   int other_degree = 2;                   // the other germs' degree in a term
   double points_per_term = 3.0;           // Q = this x S for every basis tried
+  // Bases of more terms are not tried (their least squares grows as Q S^2:
+  // at n = 15 the largest tried has 1002; at n = 30 the lead bases would
+  // reach thousands).
+  int max_terms = 1500;
   std::uint64_t seed = 1;                 // the scrambled Halton points'
   // A longer record is read at this many evenly spaced samples: the indices
   // are variance-weighted over the record, and the fit's cost grows with the
