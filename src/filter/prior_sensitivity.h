@@ -17,7 +17,7 @@ struct PriorSensitivity {
   std::vector<std::string> parameters;  // the uncertain parameters, in order
   std::vector<std::string> channels;    // the observed channels
   Eigen::MatrixXd total, first;         // parameters x channels, in [0, 1]
-  Eigen::VectorXd variance;             // per channel: prior forecast variance summed over samples
+  Eigen::VectorXd variance;             // per channel: the prior's variance summed over samples
   // Per channel: the share of the forecast's variance that the truncated
   // expansion misses, estimated by the projection's leave-one-out error e_k
   // at each sample (sum_k e_k^2 var_k / sum_k var_k; e_k as

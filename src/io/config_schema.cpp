@@ -24,7 +24,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"tolerances.<name>.germ.family", "choice", "beta", "as uncertain[i].germ", "as `uncertain[i].germ.family`"},
       {"tolerances.<name>.germ.alpha", "number", "2", "(0, inf)", "as `uncertain[i].germ.alpha`"},
       {"tolerances.<name>.germ.beta", "number", "2", "(0, inf)", "as `uncertain[i].germ.beta`"},
-      {"tolerances_prune", "number", "0", "[0, 1]", "fix (at their nominal) the tolerances whose largest total Sobol index on the observed channels (prior forecast over the record) is below this, before the run; 0 = off; the node applies it only on an analytic road"},
+      {"tolerances_prune", "number", "0", "[0, 1]", "fix (at their nominal) the tolerances whose largest total Sobol index on the observed channels (whole-record runs of the prior, docs/method.md §3.7) is below this, before the run; 0 = off; the node applies it only on an analytic road"},
       {"vehicle_file", "text", "none", "a file path", "a vehicle file (`calibrate_vehicle`'s output), relative to the config: its `vehicle:` keys and `tolerances:` entries replace the config's; it holds only those two sections"},
       // polynomial chaos and its design
       {"pc.order", "integer", "4", "[0, 20]", "total degree p; S = C(n + p, p) basis terms (15 for n = 2)"},

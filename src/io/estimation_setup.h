@@ -34,7 +34,7 @@ std::shared_ptr<const MechanicalModel> makeModel(const EstimatorConfig& c,
 // Throws ConfigError naming collocation.points for a degenerate design.
 // c with the batch methods' design (pc.batch_tolerance_interactions,
 // collocation.batch_points) in place of the one-step filter's: ES-MDA,
-// whole-set and the prior sensitivity forecast over the whole prior width.
+// whole-set over the whole prior width.
 EstimatorConfig batchDesignConfig(EstimatorConfig c);
 // Whether the batch methods' design differs from the one-step filter's.
 bool separateBatchDesign(const EstimatorConfig& c);

@@ -20,7 +20,7 @@ const char* kUsage =
     "                        [--sensitivity]\n"
     "       estimate_offline --config FILE.yaml --config-hash\n"
     "  --sensitivity: total Sobol indices of every uncertain parameter on each observed\n"
-    "  channel (prior forecast over the record), a ranked table on stderr and in the JSON\n"
+    "  channel (whole-record runs of the prior), a ranked table on stderr and in the JSON\n"
     "  --config-hash: only check the config and print its identity (0x + 16 hex digits:\n"
     "  the config with its vehicle file's contents, as the node's checkpoints hold it)\n";
 
