@@ -157,6 +157,7 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
     result.mean = pcMean(result.coefficients);
     result.stddev = pcStddev(result.coefficients);
     result.local_covariance = true;
+    result.mode = posteriorMode(propagator, series, noise, result.mean);
   }
   return result;
 }

@@ -27,6 +27,9 @@ struct BatchResult {
   // BatchRestarts::local_covariance: whether the covariance is localCovariance's
   // (false when it was asked for and a run or a factorisation failed: the passes' stays).
   bool local_covariance = false;
+  // With local_covariance: the posterior's mode near the mean (posteriorMode),
+  // where the posterior-predictive check runs; empty otherwise.
+  Eigen::VectorXd mode;
 };
 
 // Stacked observation coefficients (observations x S) of the parameter

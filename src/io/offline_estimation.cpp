@@ -286,7 +286,10 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
   }
   if (c.health.predictive_check && !series.empty() && b.mean.allFinite()) {
     const ParameterMapping& map = propagator.mapping();
-    o.predictive = posteriorPredictiveCheck(propagator.model(), map.fullParameters(b.mean), series,
+    // At the mode when the method found it: on a curved ridge the mean lies
+    // off the ridge (local_covariance.h).
+    const Eigen::VectorXd& at = b.mode.size() > 0 ? b.mode : b.mean;
+    o.predictive = posteriorPredictiveCheck(propagator.model(), map.fullParameters(at), series,
                                             c.measurement.noise, c.integration, map.count(),
                                             c.health.nis_confidence);
     if (o.predictive.outside) {

@@ -124,6 +124,22 @@ TEST(LocalCovariance, EsMdaOnALinearModelIsUnchangedByIt) {
   }
 }
 
+// The mode of a Gaussian posterior is its mean: one Gauss-Newton step from
+// anywhere (the residuals are affine), then no step improves.
+TEST(LocalCovariance, PosteriorModeOfTheLinearModelIsTheClosedFormMean) {
+  const Ridge r = makeRidge();
+  const PcPropagator propagator = makePropagator(r);
+  const Eigen::Vector3d start = r.mapping->valuesAtGerms(Eigen::RowVector3d(-1.0, 1.5, 0.7)).col(0);
+  long runs = 0;
+  const Eigen::VectorXd mode = posteriorMode(propagator, r.series, r.noise, start, 5, &runs);
+  const Eigen::Vector3d expected = r.mapping->valuesAtGerms(r.mean.transpose()).col(0);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(mode[i], expected[i], 1e-6 * std::abs(r.germ_scale[i])) << i;
+  }
+  EXPECT_GE(runs, 2 * 7 + 1);  // two Jacobians and at least one trial
+  EXPECT_LE(runs, 5 * 7 + 5 * 6);
+}
+
 TEST(LocalCovariance, RefusesAMeanAtTheSupportsEnd) {
   const Ridge r = makeRidge();
   const GermSpec beta{GermFamily::kBeta, 2.0, 2.0};
