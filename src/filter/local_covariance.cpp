@@ -10,9 +10,11 @@ namespace {
 constexpr double kStep = 1e-4;  // in prior std: well inside the model's smooth range
 
 // The posterior's negative log density near theta, in units of the prior's
-// std: 1/2 |r|^2 + 1/2 (x - m0)^T P0^-1 (x - m0), with the whitened readings'
+// std (posterior_mode_search.h's linearise works in germ units with the
+// exact prior density and forward differences; here the prior is taken by its
+// variance, as the updates take it, and the differences are central): 1/2 |r|^2 + 1/2 (x - m0)^T P0^-1 (x - m0), with the whitened readings'
 // residuals r and their Jacobian by central differences (2 n + 1 runs).
-struct Linearisation {
+struct LocalLinearisation {
   bool ok = false;
   Eigen::VectorXd residual;   // r at theta
   Eigen::MatrixXd jacobian;   // dr / dx, x = theta / scale
@@ -45,12 +47,12 @@ Eigen::MatrixXd residualsAt(const PcPropagator& propagator, const MeasurementSer
   return r.allFinite() ? r : Eigen::MatrixXd();
 }
 
-Linearisation linearise(const PcPropagator& propagator, const MeasurementSeries& series,
+LocalLinearisation lineariseAt(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, const Eigen::VectorXd& theta,
                         const Eigen::VectorXd& scale, long* simulations) {
   const ParameterMapping& mapping = propagator.mapping();
   const Eigen::Index n = mapping.count();
-  Linearisation l;
+  LocalLinearisation l;
   Eigen::MatrixXd points = theta.replicate(1, 2 * n + 1);
   for (Eigen::Index i = 0; i < n; ++i) {
     points(i, 1 + 2 * i) += kStep * scale[i];
@@ -72,7 +74,7 @@ Linearisation linearise(const PcPropagator& propagator, const MeasurementSeries&
   return l;
 }
 
-double objective(const Eigen::VectorXd& r, const Eigen::VectorXd& x, const Linearisation& l) {
+double objective(const Eigen::VectorXd& r, const Eigen::VectorXd& x, const LocalLinearisation& l) {
   const Eigen::VectorXd d = x - l.prior_mean;
   return 0.5 * r.squaredNorm() + 0.5 * d.dot(l.prior_information * d);
 }
@@ -84,7 +86,7 @@ bool localCovariance(const PcPropagator& propagator, const MeasurementSeries& se
   const ParameterMapping& mapping = propagator.mapping();
   const Eigen::VectorXd scale = priorScale(mapping.priorCoefficients(propagator.basis()));
   const Eigen::VectorXd mean = coefficients.col(0);
-  const Linearisation l = linearise(propagator, series, noise, mean, scale, simulations);
+  const LocalLinearisation l = lineariseAt(propagator, series, noise, mean, scale, simulations);
   if (!l.ok) return false;
   const Eigen::Index n = mean.size();
   const Eigen::LLT<Eigen::MatrixXd> information(l.jacobian.transpose() * l.jacobian +
@@ -101,7 +103,7 @@ Eigen::VectorXd posteriorMode(const PcPropagator& propagator, const MeasurementS
   const Eigen::VectorXd scale = priorScale(mapping.priorCoefficients(propagator.basis()));
   Eigen::VectorXd theta = start;
   for (int step = 0; step < max_steps; ++step) {
-    const Linearisation l = linearise(propagator, series, noise, theta, scale, simulations);
+    const LocalLinearisation l = lineariseAt(propagator, series, noise, theta, scale, simulations);
     if (!l.ok) break;
     const Eigen::VectorXd x = theta.cwiseQuotient(scale);
     const double before = objective(l.residual, x, l);

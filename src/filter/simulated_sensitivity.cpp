@@ -82,6 +82,23 @@ Fit fitReadings(const std::vector<GermSpec>& germs, std::vector<std::vector<int>
 
 }  // namespace
 
+Eigen::MatrixXd recordReadings(const MechanicalModel& model, const ParameterMapping& mapping,
+                               const Eigen::MatrixXd& xi, const std::vector<double>& times,
+                               const std::vector<int>& channels,
+                               const IntegratorSettings& integration, int threads,
+                               long* simulations) {
+  const std::vector<Eigen::MatrixXd> out =
+      simulateGermChannels(model, mapping, xi, times, integration, threads, simulations);
+  const Eigen::Index samples = static_cast<Eigen::Index>(times.size());
+  Eigen::MatrixXd y(static_cast<Eigen::Index>(channels.size()) * samples, xi.cols());
+  for (Eigen::Index k = 0; k < samples; ++k) {
+    for (std::size_t c = 0; c < channels.size(); ++c) {
+      y.row(static_cast<Eigen::Index>(c) * samples + k) = out[k].row(channels[c]);
+    }
+  }
+  return y;
+}
+
 std::vector<std::vector<int>> leadingGermIndices(int dimension, const std::vector<int>& leading,
                                                  int lead_order, int mixed_order,
                                                  int other_degree) {
@@ -132,12 +149,8 @@ PriorSensitivity simulatedSensitivity(const MechanicalModel& model, const Parame
         scrambledHaltonPoints(static_cast<int>(q - have), n, settings.seed,
                               static_cast<std::uint64_t>(have) + 1),
         germs);
-    const std::vector<Eigen::MatrixXd> out = simulateGermChannels(
-        model, mapping, more.transpose(), times, integration, threads, &simulations);
-    Eigen::MatrixXd block(readings.rows(), more.rows());
-    for (int k = 0; k < samples; ++k) {
-      for (int c = 0; c < channel_count; ++c) block.row(c * samples + k) = out[k].row(channels[c]);
-    }
+    const Eigen::MatrixXd block = recordReadings(model, mapping, more.transpose(), times, channels,
+                                                 integration, threads, &simulations);
     if (!block.allFinite()) {
       throw std::runtime_error(
           "sensitivity: a simulation of the prior's design points failed (non-finite readings); "

@@ -45,6 +45,15 @@ struct SimulatedSensitivitySettings {
   int threads = 0;                        // simulation threads; 0 = the machine's cores
 };
 
+// The readings of `channels` at `times` for the germ points xi (count x B):
+// (channels x times) x B, row c * times + k for channel c at sample k;
+// columns whose parameters are inadmissible are NaN (simulateGermChannels).
+Eigen::MatrixXd recordReadings(const MechanicalModel& model, const ParameterMapping& mapping,
+                               const Eigen::MatrixXd& xi, const std::vector<double>& times,
+                               const std::vector<int>& channels,
+                               const IntegratorSettings& integration, int threads,
+                               long* simulations = nullptr);
+
 // The multi-indices of one such basis (graded: the total-degree order of
 // polynomial_basis.h, filtered). `leading`: germ indices.
 std::vector<std::vector<int>> leadingGermIndices(int dimension, const std::vector<int>& leading,

@@ -3,7 +3,9 @@
 // model, against estimate_offline --sensitivity's (simulated_sensitivity.h),
 // on vehicle_live.yaml over the paper bump, N = 100. Prints per parameter and
 // channel both, the Jansen estimate's 95 % half-width, the largest difference
-// over the indices >= 0.05 and whether the top 3 per channel agree. Not part
+// over the indices >= 0.05 and whether the top 3 per channel agree; then, per
+// parameter, the largest index of each and of the filters' re-projected
+// forecast (prior_sensitivity.h), the comparison of docs/real_vehicle_reference.md §4. Not part
 // of bench.sh (seconds to a minute).
 //   PC_EKF_JANSEN_SAMPLES (20000 per matrix: (n + 2) x that many runs),
 //   PC_EKF_JANSEN_SEED (7), PC_EKF_JANSEN_CONFIG (vehicle_live.yaml; its road
@@ -14,26 +16,11 @@
 #include <random>
 
 #include "bench_support.h"
-#include "pc_ekf/filter/posterior_residual.h"
+#include "pc_ekf/filter/simulated_sensitivity.h"
 #include "pc_ekf/io/record_sensitivity.h"
 
 namespace pc_ekf::bench {
 namespace {
-
-// Readings (channels x times) x columns of xi.
-Eigen::MatrixXd readings(const MechanicalModel& model, const ParameterMapping& mapping,
-                         const Eigen::MatrixXd& xi, const std::vector<double>& times,
-                         const EstimatorConfig& c, const std::vector<int>& channels) {
-  const auto out = simulateGermChannels(model, mapping, xi, times, c.integration, 0);
-  const Eigen::Index t = static_cast<Eigen::Index>(times.size());
-  Eigen::MatrixXd y(static_cast<Eigen::Index>(channels.size()) * t, xi.cols());
-  for (Eigen::Index k = 0; k < t; ++k) {
-    for (std::size_t ch = 0; ch < channels.size(); ++ch) {
-      y.row(static_cast<Eigen::Index>(ch) * t + k) = out[k].row(channels[ch]);
-    }
-  }
-  return y;
-}
 
 std::vector<int> topThree(const Eigen::VectorXd& v) {
   std::vector<int> order(v.size());
@@ -57,10 +44,13 @@ void BM_SensitivityAgainstJansen(benchmark::State& state) {
   const std::vector<int> channels = channelIndices(c);
   const int n = mapping.count(), nc = static_cast<int>(channels.size());
   const Eigen::Index t = static_cast<Eigen::Index>(times.size());
-  PriorSensitivity product;
+  PriorSensitivity product, forecast;
   Eigen::MatrixXd jansen(n, nc), half(n, nc);
   for (auto _ : state) {
     product = recordSensitivity(c, model, times);
+    // For comparison: the filters' forecast, re-projected at every sample, on
+    // the batch methods' design (what --sensitivity read before whole-record runs).
+    forecast = priorSensitivity(*makePropagator(batchDesignConfig(c), model), times, channels);
     std::mt19937_64 rng(std::getenv("PC_EKF_JANSEN_SEED") ? std::atoll(std::getenv("PC_EKF_JANSEN_SEED")) : 7);
     std::uniform_real_distribution<double> uniform(0.0, 1.0);
     std::vector<OrthonormalFamily> family;
@@ -72,8 +62,8 @@ void BM_SensitivityAgainstJansen(benchmark::State& state) {
         b(i, j) = family[i].inverseCdf(uniform(rng));
       }
     }
-    const Eigen::MatrixXd fa = readings(*model, mapping, a, times, c, channels);
-    const Eigen::MatrixXd fb = readings(*model, mapping, b, times, c, channels);
+    const Eigen::MatrixXd fa = recordReadings(*model, mapping, a, times, channels, c.integration, 0);
+    const Eigen::MatrixXd fb = recordReadings(*model, mapping, b, times, channels, c.integration, 0);
     Eigen::VectorXd variance = Eigen::VectorXd::Zero(nc);
     for (Eigen::Index o = 0; o < fa.rows(); ++o) {
       Eigen::VectorXd both(2 * draws);
@@ -83,7 +73,7 @@ void BM_SensitivityAgainstJansen(benchmark::State& state) {
     for (int i = 0; i < n; ++i) {
       Eigen::MatrixXd ab = a;
       ab.row(i) = b.row(i);
-      const Eigen::MatrixXd fab = readings(*model, mapping, ab, times, c, channels);
+      const Eigen::MatrixXd fab = recordReadings(*model, mapping, ab, times, channels, c.integration, 0);
       for (int ch = 0; ch < nc; ++ch) {
         // Jansen: T_i = E[(f(A) - f(A_B^i))^2] / 2 / V, summed over the samples.
         const Eigen::ArrayXd per = (fa.middleRows(ch * t, t) - fab.middleRows(ch * t, t))
@@ -112,6 +102,18 @@ void BM_SensitivityAgainstJansen(benchmark::State& state) {
   int same = 0;
   for (int ch = 0; ch < nc; ++ch) {
     same += topThree(product.total.col(ch)) == topThree(jansen.col(ch));
+  }
+  std::printf("largest over the channels: product / Jansen / the filters' forecast\n");
+  for (int i = 0; i < n; ++i) {
+    std::printf("  %-24s %.4f / %.4f / %.4f\n", product.parameters[i].c_str(), product.largestTotal(i),
+                jansen.row(i).maxCoeff(), forecast.largestTotal(i));
+  }
+  if (forecast.unexplained.size() > 0) {
+    std::printf("missed by the forecast's one-step leave-one-out error:");
+    for (Eigen::Index ch = 0; ch < forecast.unexplained.size(); ++ch) {
+      std::printf(" %.4f", forecast.unexplained[ch]);
+    }
+    std::printf("\n");
   }
   std::printf("expansion: %s\nlargest |product - Jansen| over the indices >= 0.05: %.4f; top 3 the same on %d of %d channels\n",
               product.expansion.c_str(), worst, same, nc);
