@@ -130,6 +130,19 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
     throw std::invalid_argument("relinearize: " + breach.setting + " " + breach.value + ", needs " +
                                 breach.needs);
   }
+  if (settings_.horizon.window > 0.0) {
+    horizon_ = std::make_unique<MovingHorizon>(*propagator_, settings_.horizon);
+    settings_.relinearize.shrink = 0.0;  // the horizon's re-runs take its place
+    x_.bottomRows(n) = horizon_->coefficients();
+  }
+  const std::vector<std::string> names = propagator_->mapping().names();
+  for (int i = 0; i < n; ++i) {
+    if (names[static_cast<std::size_t>(i)].rfind("added_mass", 0) == 0) load_rows_.push_back(i);
+  }
+  if (settings_.reopen.mode == ReopenMode::kLoad && (!horizon_ || load_rows_.empty())) {
+    throw std::invalid_argument(
+        "reopen mode load needs filter.linearization: mean and an uncertain added_mass");
+  }
   startRelinearization();
   // The re-open rule's chance rate, simulated once per process: here, before
   // the first sample, for a sample with every channel of the model.
@@ -187,6 +200,10 @@ double OneStepFilter::gateBound(int dof) {
 void OneStepFilter::reset() {
   cancelRerun();
   x_ = propagator_->priorState();
+  if (horizon_) {
+    horizon_->reset();
+    x_.bottomRows(propagator_->parameterCount()) = horizon_->coefficients();
+  }
   t_ = 0.0;
   samples_ = 0;
   rejected_ = 0;
@@ -213,6 +230,7 @@ void OneStepFilter::restore(const Eigen::MatrixXd& x, double time, int samples,
   health_.reset();
   if (rates_.samples() == 0) rates_.reset(time);  // a fresh filter: the run starts here
   working_theta_ = working;
+  if (horizon_) horizon_->restore(x_.bottomRows(propagator_->parameterCount()));
   endRelinearization();
 }
 
@@ -373,34 +391,12 @@ StepResult OneStepFilter::relinearize(const StepResult& r, const Eigen::ArrayXi&
 }
 
 StepResult OneStepFilter::step(const Measurement& m) {
-  const MechanicalModel& model = propagator_->model();
   StepResult r;
   const double dt = m.time - t_;
-  r.forecast = propagator_->forecast(x_, t_, m.time);
-  const int ns = propagator_->stateCount();
-  const int np = propagator_->parameterCount();
-  if (r.forecast.ok && settings_.drift.size() != 0) {
-    applyDrift(x_, ns, settings_.drift, dt);
-  }
-  t_ = m.time;
-  r.index = ++samples_;
-  r.time = m.time;
-  if (!m.channels.empty() && r.forecast.ok) {
-    // Observation coefficients Z = H X_y of the observed channels.
-    z_coeffs_.resize(static_cast<Eigen::Index>(m.channels.size()), x_.cols());
-    for (std::size_t i = 0; i < m.channels.size(); ++i) {
-      z_coeffs_.row(i).noalias() =
-          model.observationMatrix().row(m.channels[i]).lazyProduct(x_.topRows(ns));
-    }
-    x_before_ = x_;
-    const NoiseWhitening white(settings_.noise, m);
-    Eigen::VectorXd values = m.values;
-    white.whiten(values);
-    white.whiten(z_coeffs_);
-    r.update = pcKalmanUpdate(x_, z_coeffs_, values, white.variances(), settings_.rule);
-    safeguard(r);
+  if (horizon_) {
+    horizonUpdate(m, dt, r);
   } else {
-    r.update.finite = x_.allFinite();
+    collocationUpdate(m, dt, r);
   }
   r.coefficients = x_.bottomRows(propagator_->parameterCount());
   r.mean = pcMean(r.coefficients);
@@ -424,11 +420,11 @@ StepResult OneStepFilter::step(const Measurement& m) {
   const bool above = r.health.nis_window_outside && r.health.nis_window_mean > r.health.window_upper;
   violations_ = above ? violations_ + 1 : 0;
   if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
-    reopenExtendedState(x_, static_cast<int>(x_.rows()) - np,
-                        propagator_->priorState().bottomRows(np), settings_.reopen);
+    reopen();
     health_.reset();
     violations_ = 0;
     r.reopened = true;
+    r.load_reset = settings_.reopen.mode == ReopenMode::kLoad;
     r.health.reopened = true;
   }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
@@ -437,6 +433,74 @@ StepResult OneStepFilter::step(const Measurement& m) {
   r.health.rates = rates_.add(r.time, r.gated, r.health.damped, r.reopened, support,
                               reopenChance(r.update.channels));
   return r;
+}
+
+void OneStepFilter::reopen() {
+  const int np = propagator_->parameterCount();
+  if (!horizon_) {
+    reopenExtendedState(x_, static_cast<int>(x_.rows()) - np,
+                        propagator_->priorState().bottomRows(np), settings_.reopen);
+    return;
+  }
+  std::vector<int> rows = load_rows_;
+  if (settings_.reopen.mode != ReopenMode::kLoad) {  // width, prior: every parameter
+    rows.clear();
+    for (int i = 0; i < np; ++i) rows.push_back(i);
+  }
+  horizon_->reopen(rows);
+  x_.bottomRows(np) = horizon_->coefficients();
+}
+
+void OneStepFilter::horizonUpdate(const Measurement& m, double dt, StepResult& r) {
+  const int np = propagator_->parameterCount();
+  if (settings_.drift.size() != 0) horizon_->drift(settings_.drift, dt);
+  t_ = m.time;
+  r.index = ++samples_;
+  r.time = m.time;
+  const HorizonStep h = horizon_->process(
+      m, settings_.noise,
+      [this](int dof) { return settings_.innovation_gate > 0.0 ? gateBound(dof) : 0.0; },
+      settings_.support == SupportRule::kDamp);
+  r.update = h.update;
+  r.gated = h.gated;
+  r.damping = h.damping;
+  if (!m.channels.empty() && !h.update.finite) {
+    r.rolled_back = true;
+    ++rejected_;
+  } else if (h.gated) {
+    ++rejected_;
+  }
+  r.relinearized = h.reruns > 0;
+  x_.bottomRows(np) = horizon_->coefficients();
+}
+
+void OneStepFilter::collocationUpdate(const Measurement& m, double dt, StepResult& r) {
+  const MechanicalModel& model = propagator_->model();
+  r.forecast = propagator_->forecast(x_, t_, m.time);
+  const int ns = propagator_->stateCount();
+  if (r.forecast.ok && settings_.drift.size() != 0) {
+    applyDrift(x_, ns, settings_.drift, dt);
+  }
+  t_ = m.time;
+  r.index = ++samples_;
+  r.time = m.time;
+  if (!m.channels.empty() && r.forecast.ok) {
+    // Observation coefficients Z = H X_y of the observed channels.
+    z_coeffs_.resize(static_cast<Eigen::Index>(m.channels.size()), x_.cols());
+    for (std::size_t i = 0; i < m.channels.size(); ++i) {
+      z_coeffs_.row(i).noalias() =
+          model.observationMatrix().row(m.channels[i]).lazyProduct(x_.topRows(ns));
+    }
+    x_before_ = x_;
+    const NoiseWhitening white(settings_.noise, m);
+    Eigen::VectorXd values = m.values;
+    white.whiten(values);
+    white.whiten(z_coeffs_);
+    r.update = pcKalmanUpdate(x_, z_coeffs_, values, white.variances(), settings_.rule);
+    safeguard(r);
+  } else {
+    r.update.finite = x_.allFinite();
+  }
 }
 
 void OneStepFilter::safeguard(StepResult& r) {

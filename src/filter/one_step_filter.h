@@ -11,6 +11,7 @@
 #include "pc_ekf/filter/health.h"
 #include "pc_ekf/filter/kalman_update.h"
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/moving_horizon.h"
 #include "pc_ekf/filter/pc_propagator.h"
 #include "pc_ekf/filter/update_safeguards.h"
 
@@ -38,6 +39,7 @@ struct StepResult {
   bool rolled_back = false;  // the update was not finite: the forecast state was kept
   double damping = 1.0;   // fraction of the update applied (support rule)
   bool reopened = false;  // uncertainty re-opened after this sample
+  bool load_reset = false;  // reopen.mode load: the load's estimate started afresh
   int rejected = 0;       // samples gated or rolled back since the prior
   bool relinearized = false;  // the samples so far were re-run from a working prior
   int restarts = 0;           // re-linearisations since the prior
@@ -105,6 +107,10 @@ class OneStepFilter {
   double gateBound(int dof);
   void safeguard(StepResult& r);
   StepResult step(const Measurement& m);
+  // The update of step(): by collocation, or at the mean (horizon_).
+  void collocationUpdate(const Measurement& m, double dt, StepResult& r);
+  void horizonUpdate(const Measurement& m, double dt, StepResult& r);
+  void reopen();
   // Re-runs the kept samples from a working prior around r; r when impossible.
   StepResult relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed);
   // The working prior's parameter coefficients around r (false: none).
@@ -141,6 +147,8 @@ class OneStepFilter {
   std::vector<double> reopen_chance_;
   StepResult processSample(const Measurement& m);
   int restarts_ = 0;
+  std::unique_ptr<MovingHorizon> horizon_;  // filter.linearization: mean
+  std::vector<int> load_rows_;              // reopen.mode load: added_mass...
   std::unique_ptr<DeferredRerun> rerun_;  // a deferred re-run under way
   Eigen::MatrixXd rerun_theta_;           // its working prior's parameter coefficients
   int swap_after_ = 0;                    // its swap: after this sample

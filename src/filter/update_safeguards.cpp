@@ -19,15 +19,16 @@ std::string toString(ReopenMode m) {
     case ReopenMode::kOff: return "off";
     case ReopenMode::kWidth: return "width";
     case ReopenMode::kPrior: return "prior";
+    case ReopenMode::kLoad: return "load";
   }
   return "?";
 }
 
 ReopenMode reopenModeFromString(const std::string& s) {
-  for (auto m : {ReopenMode::kOff, ReopenMode::kWidth, ReopenMode::kPrior}) {
+  for (auto m : {ReopenMode::kOff, ReopenMode::kWidth, ReopenMode::kPrior, ReopenMode::kLoad}) {
     if (toString(m) == s) return m;
   }
-  throw std::invalid_argument("reopen mode '" + s + "' unknown, expected off, width or prior");
+  throw std::invalid_argument("reopen mode '" + s + "' unknown, expected off, width, prior or load");
 }
 
 double supportDamping(const Eigen::VectorXd& before, const Eigen::VectorXd& after,

@@ -20,7 +20,9 @@ enum class SupportRule { kIgnore, kDamp };
 std::string toString(SupportRule r);
 SupportRule supportRuleFromString(const std::string& s);  // throws std::invalid_argument
 
-enum class ReopenMode { kOff, kWidth, kPrior };
+// kLoad: the load's parameters (added_mass...) back to their prior, the
+// vehicle values kept (filter.linearization: mean only).
+enum class ReopenMode { kOff, kWidth, kPrior, kLoad };
 std::string toString(ReopenMode m);
 ReopenMode reopenModeFromString(const std::string& s);  // throws std::invalid_argument
 
@@ -64,11 +66,20 @@ SettingBreach relinearizeBreach(const RelinearizeSettings& s);
 // filter.drift, filter.reopen and filter.relinearize (estimator_config.h
 // reads them into this struct, whose support rule the batch methods take
 // too; the one-step filter applies them all, OneStepSettings).
+// filter.linearization: mean (moving_horizon.h).
+struct MovingHorizonSettings {
+  double window = 0.0;  // s; 0 = off (the collocation filter)
+  double shift = 0.5;   // re-run when a linearisation point is further, in posterior std
+  int reruns = 3;       // per window
+  double step = 1e-4;   // finite-difference step, in prior std
+};
+
 struct SafeguardSettings {
   SupportRule support = SupportRule::kIgnore;
   Eigen::VectorXd drift;  // per parameter, random-walk std per sqrt(s) (empty = none)
   ReopenSettings reopen;
   RelinearizeSettings relinearize;  // one-step
+  MovingHorizonSettings horizon;    // one-step, window > 0: linearised at the mean
 };
 
 // Largest gamma in [0, 1] such that before + gamma (after - before) keeps every

@@ -222,11 +222,27 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   try {
     s.reopen.mode = reopenModeFromString(mode);
   } catch (const std::invalid_argument&) {
-    r.fail("mode", "'" + mode + "'", "off, width or prior");
+    r.fail("mode", "'" + mode + "'", "off, width, prior or load");
   }
   r.number("width", s.reopen.width, 0.0, kInf, true);
   r.integer("after", s.reopen.after, 1, 100000000);
   r.finish();
+  std::string linearization = s.horizon.window > 0.0 ? "mean" : "collocation";
+  f.text("linearization", linearization);
+  if (linearization != "mean" && linearization != "collocation") {
+    f.fail("linearization", "'" + linearization + "'", "collocation or mean");
+  }
+  YamlMapReader w = f.map("horizon");
+  double window = 2.0;
+  w.number("window", window, 0.0, kInf, true);
+  w.number("shift", s.horizon.shift, 0.0, kInf, true);
+  w.integer("reruns", s.horizon.reruns, 0, 100);
+  w.number("step", s.horizon.step, 0.0, 0.1, true);
+  w.finish();
+  s.horizon.window = linearization == "mean" ? window : 0.0;
+  if (s.reopen.mode == ReopenMode::kLoad && linearization != "mean") {
+    r.fail("mode", "'load'", "filter.linearization: mean (or off, width, prior)");
+  }
   YamlMapReader l = f.map("relinearize");
   RelinearizeSettings& rl = s.relinearize;
   l.number("shrink", rl.shrink, 0.0, 0.999);

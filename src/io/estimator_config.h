@@ -210,7 +210,7 @@ struct EstimatorConfig {
   HealthConfig health;
   // filter.support, .drift, .reopen, .relinearize; damp unless configured.
   SafeguardSettings safeguards{SupportRule::kDamp, Eigen::VectorXd(), ReopenSettings(),
-                               RelinearizeSettings()};
+                               RelinearizeSettings(), MovingHorizonSettings()};
   PdfConfig pdf;
   NodeConfig node;
 

@@ -1,4 +1,5 @@
 #include "pc_ekf/io/road_free_stream.h"
+#include "pc_ekf/filter/moving_horizon.h"
 
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,10 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     input_channels_.push_back(type.description().channelIndex(name));
   }
   inputs_ = std::make_shared<ReadingInputs>(inputs);
+  // The one-step filter at the mean carries the roll angle's error (the
+  // gyro's integrated noise) as a state of its own (moving_horizon.h).
+  inputs_->setIntegralInState(c.safeguards.horizon.window > 0.0 &&
+                              MovingHorizon::carriesRollAngle(type.description().channelNames()));
   try {
     model_ = type.buildRoadFree(*c.modelParameters(), inputs_, c.measurement.zero);
   } catch (const std::invalid_argument& e) {

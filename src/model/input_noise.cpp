@@ -31,6 +31,7 @@ Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t
     const int i = angle ? integrated[static_cast<std::size_t>(which - 2 * n)] : which % n;
     if (!angle && which >= n && at_rest) continue;  // nothing read before the first sample
     const double reading = which < n ? now0[i] : before0[i];
+    if (angle && inputs.integralInState()) continue;  // the estimator's own state
     const double step = angle ? absolute[i] * std::sqrt(dt * t[k])
                               : std::hypot(absolute[i], relative[i] * reading);
     if (!(step > 0.0)) continue;

@@ -50,6 +50,11 @@ class ReadingInputs {
   // for an output read from the inputs at a sample and at the one before.
   void setNoiseCorrelation(int c, double rho);
   double noiseCorrelation(int c) const;
+  // True when the estimator carries the random walk of input c's integral
+  // as a state of its own (filter.linearization: mean): errors in variables
+  // then leave that walk out of the inherited noise.
+  void setIntegralInState(bool in_state) { integral_in_state_ = in_state; }
+  bool integralInState() const { return integral_in_state_; }
 
  private:
   std::vector<std::string> names_;
@@ -58,6 +63,7 @@ class ReadingInputs {
   std::vector<std::vector<double>> cum_;  // [input][sample]: integral up to t_k
   SampledRoad series_;                    // v_ by time, for the interpolation
   std::vector<double> rho_;               // [input]: lag-1 noise correlation
+  bool integral_in_state_ = false;
   // append() against at(), previousTime(), integral(). A lock, not the copies
   // a topic road hands its re-runs (RoadSnapshots): these inputs keep the
   // whole record, so a copy per sample would cost O(samples) each.

@@ -1,0 +1,123 @@
+// The one-step filter linearised at its mean, over a moving horizon
+// (filter.linearization: mean, docs/method.md §4.11). The parameters' law is
+// carried as a Gaussian in standardised coordinates (zeta = (theta - prior
+// mean) / prior std); each sample is predicted at the mean and at one step
+// along each parameter, so the update uses the model's exact Jacobian there
+// instead of a projection over the spread, and a parameter the readings do
+// not depend on never moves. The samples of the current window are kept;
+// at its end, when a mean has moved further than `shift` posterior std from
+// where a sample was linearised, the window is re-run from its own prior
+// with every sample linearised at the window's final mean (a Gauss-Newton
+// iteration, at most `reruns` times); then its posterior becomes the next
+// window's prior. Memory and cost per sample do not grow with the record.
+//
+// Road-free roll plane: the roll angle is the gyro's integral, and its
+// integrated noise is one random walk shared by every later sample, not
+// noise of its own per sample. It is carried as one more state, the angle's
+// error e (rad, variance growing by (sigma_gyro dt)^2 a sample), that
+// accel_y and accel_z see through their slope in the angle; the readings'
+// inherited noise then leaves it out (ReadingInputs::integralInState).
+#pragma once
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "pc_ekf/filter/kalman_update.h"
+#include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/pc_propagator.h"
+#include "pc_ekf/filter/update_safeguards.h"
+
+namespace pc_ekf {
+
+// What one sample's update did (the caller applies gate and damping).
+struct HorizonStep {
+  UpdateDiagnostics update;
+  bool gated = false;
+  double damping = 1.0;
+  int reruns = 0;  // window re-runs at this sample (its window's end)
+};
+
+class MovingHorizon {
+ public:
+  // Throws std::invalid_argument when the model has dynamic states (it needs
+  // a model whose readings are algebraic in its inputs: road.source none).
+  MovingHorizon(const PcPropagator& propagator, const MovingHorizonSettings& settings);
+
+  void reset();  // the prior
+  // gate_bound(dof) <= 0: no gate. lower/upper: parameter supports (damping
+  // when damp is true).
+  template <class Gate>
+  HorizonStep process(const Measurement& m, const NoiseModel& noise, const Gate& gate_bound,
+                      bool damp) {
+    Eigen::VectorXd mean_after;
+    Eigen::MatrixXd cov_after;
+    HorizonStep s = propose(m, noise, &mean_after, &cov_after);
+    if (s.update.finite) {
+      const double bound = gate_bound(s.update.channels);
+      if (bound > 0.0 && s.update.nis > bound) s.gated = true;
+    }
+    accept(m, s, mean_after, cov_after, damp);
+    return s;
+  }
+  // The parameters' expansion (count x S): affine, mean and covariance exact.
+  Eigen::MatrixXd coefficients() const;
+  // Sets the Gaussian from an affine expansion (a checkpoint); ends the window.
+  void restore(const Eigen::MatrixXd& coefficients);
+  // Rows `rows` back to their prior, uncorrelated with the others (a load
+  // change: the vehicle values keep what was learned). Ends the window.
+  void reopen(const std::vector<int>& rows);
+  // Random walk: variance intensity_i^2 dt added to parameter i.
+  void drift(const Eigen::VectorXd& intensity, double dt);
+  long evaluations() const { return evaluations_; }
+  // True for channels whose roll angle integrates the gyro: accel_y,
+  // accel_z and gyro_x, and no pitch (the roll plane).
+  static bool carriesRollAngle(const std::vector<std::string>& channels);
+  // The roll angle's error: mean and std (rad); 0 when not carried.
+  double rollAngleError() const { return angle_ ? mean_[last()] : 0.0; }
+  double rollAngleErrorStd() const { return angle_ ? std::sqrt(cov_(last(), last())) : 0.0; }
+
+ private:
+  struct Kept {
+    Measurement m;
+    double dt = 0.0;
+    Eigen::VectorXd linearised_at;
+    bool used = true;
+  };
+  HorizonStep propose(const Measurement& m, const NoiseModel& noise, Eigen::VectorXd* mean,
+                      Eigen::MatrixXd* cov);
+  void accept(const Measurement& m, HorizonStep& s, const Eigen::VectorXd& mean,
+              const Eigen::MatrixXd& cov, bool damp);
+  // Predicted readings of m's channels at zeta and along each parameter
+  // (whitened); false when a point is not admissible or not finite.
+  bool predict(const Measurement& m, const NoiseModel& noise, const Eigen::VectorXd& at,
+               Eigen::VectorXd* values, Eigen::VectorXd* z0, Eigen::MatrixXd* jacobian,
+               Eigen::VectorXd* variances);
+  void endWindow(HorizonStep& s);
+  void startWindow();
+  Eigen::VectorXd theta(const Eigen::VectorXd& zeta) const {
+    return prior_mean_ + prior_std_.cwiseProduct(zeta);
+  }
+
+  const PcPropagator& propagator_;
+  const NoiseModel* noise_ = nullptr;
+  int parameters_ = 0;
+  bool angle_ = false;  // the roll angle's error is the last state
+  int accel_y_ = -1, accel_z_ = -1, gyro_ = -1;
+  double previous_time_ = 0.0;
+  int last() const { return parameters_; }
+  void walk(Eigen::MatrixXd& cov, double dt) const;  // the last sample's (window re-runs)
+  MovingHorizonSettings settings_;
+  Eigen::VectorXd prior_mean_, prior_std_, lower_, upper_;
+  Eigen::VectorXd mean_;  // zeta
+  Eigen::MatrixXd cov_;
+  Eigen::VectorXd window_mean_;  // the window's prior
+  Eigen::MatrixXd window_cov_;
+  double window_start_ = 0.0;
+  std::vector<Kept> kept_;
+  std::vector<int> degree_one_;  // basis term of each parameter's germ, degree 1
+  long evaluations_ = 0;
+};
+
+}  // namespace pc_ekf
