@@ -422,10 +422,14 @@ StepResult OneStepFilter::step(const Measurement& m) {
   if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
     reopen();
     health_.reset();
-    violations_ = 0;
     r.reopened = true;
     r.load_reset = settings_.reopen.mode == ReopenMode::kLoad;
     r.health.reopened = true;
+    if (r.load_reset) {  // the samples that showed the change are no misfit
+      rates_.excuse(violations_ - 1);
+      r.health.gated = r.health.damped = false;
+    }
+    violations_ = 0;
   }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
   // The rule's chance re-opens at this sample's dof: a correct model at a

@@ -134,6 +134,16 @@ RateCheck SafeguardRateMonitor::poisson(long count, double exposure, double rate
   return c;
 }
 
+void SafeguardRateMonitor::excuse(int count) {
+  for (auto e = events_.rbegin(); e != events_.rend() && count > 0; ++e, --count) {
+    window_.gated -= e->gated;
+    run_.gated -= e->gated;
+    window_.damped -= e->damped;
+    run_.damped -= e->damped;
+    e->gated = e->damped = false;
+  }
+}
+
 SafeguardRates SafeguardRateMonitor::add(double time, bool gated, bool damped, bool reopened,
                                          int support, double reopen_chance) {
   events_.push_back({time, gated, damped, reopened, support, reopen_chance});

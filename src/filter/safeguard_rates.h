@@ -70,6 +70,10 @@ class SafeguardRateMonitor {
                      double reopen_chance = 0.0);
   long samples() const { return run_.samples; }
   const RateSettings& settings() const { return settings_; }
+  // The last `count` samples were gated or damped because the load changed
+  // (a load change detected after them: reopen mode load): they count as
+  // neither (the change counts as a re-open).
+  void excuse(int count);
 
  private:
   struct Counts {

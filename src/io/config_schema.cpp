@@ -124,7 +124,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"filter.horizon.window", "number", "2", "(0, inf)", "s (linearization mean): the samples kept for a re-run; at the window's end its posterior becomes the next window's prior"},
       {"filter.horizon.shift", "number", "0.5", "(0, inf)", "a window is re-run when a sample was linearised further than this many posterior std from the window's final mean"},
       {"filter.horizon.reruns", "integer", "3", "[0, 100]", "Gauss-Newton re-runs per window at most"},
-      {"filter.horizon.step", "number", "1e-4", "(0, 0.1]", "finite-difference step of the Jacobian, in prior std"},
+      {"filter.horizon.step", "number", "1e-04", "(0, 0.1]", "finite-difference step of the Jacobian, in prior std"},
       {"filter.relinearize.shrink", "number", "0", "[0, 0.999] (shrink x width < 1)", "one-step re-linearisation ([method.md §4.9](method.md)): when a parameter's std falls below shrink x its start, start again from a working prior around the estimate (std = width x std) and re-run the kept samples; 0 = off (the paper's filter)"},
       {"filter.relinearize.width", "number", "20", "(0, inf) (shrink x width < 1)", "working prior std, as a multiple of the current std"},
       {"filter.relinearize.max_restarts", "integer", "4", "[1, 100]", "re-linearisations at most"},
