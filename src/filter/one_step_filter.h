@@ -97,6 +97,9 @@ class OneStepFilter {
   // Deferred re-runs (relinearize.defer > 0) whose worker had not finished
   // when their swap came, so that the sample waited for it.
   int lateSwaps() const { return late_swaps_; }
+  // linearization mean: point runs of the model (n + 1 per sample and
+  // re-run sample); 0 for collocation, whose cost the propagator counts.
+  long horizonEvaluations() const { return horizon_ ? horizon_->evaluations() : 0; }
 
  private:
   std::shared_ptr<const PcPropagator> propagator_;

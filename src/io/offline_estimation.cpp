@@ -151,7 +151,7 @@ void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
   r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
   summarise(c, last.mean, last.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler, last.coefficients);
-  r->integrations = prop->integrations();
+  r->integrations = prop->integrations() + filter.horizonEvaluations();
   for (const auto& w : last.health.warnings()) r->warnings.push_back(w);
   if (r->rejected_samples) {
     r->warnings.push_back(std::to_string(r->rejected_samples) +
