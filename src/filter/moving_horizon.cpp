@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "pc_ekf/pc/pc_statistics.h"
@@ -70,6 +71,8 @@ void MovingHorizon::reset() {
   cov_ = Eigen::MatrixXd::Identity(n, n);
   if (angle_) cov_(last(), last()) = 0.0;  // at rest at t = 0: no angle integrated yet
   previous_time_ = 0.0;
+  recent_.clear();
+  anchor_rows_.clear();
   startWindow();
 }
 
@@ -111,10 +114,13 @@ bool MovingHorizon::predict(const Measurement& m, const NoiseModel& noise, const
   for (int i = 0; i <= n; ++i) {
     if (!model.invalidReason(full.col(i)).empty()) return false;
   }
-  const std::unique_ptr<ModelBatch> batch = model.prepare(full);
   Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(model.stateSize(), n + 1);
-  batch->readings(m.time, y);
-  evaluations_ += n + 1;
+  if (anchor_rows_.empty()) {
+    model.prepare(full)->readings(m.time, y);
+    evaluations_ += n + 1;
+  } else if (!anchoredReadings(th, m.time, y)) {
+    return false;
+  }
   Eigen::MatrixXd z(c, n + 1);
   for (int r = 0; r < c; ++r) {
     z.row(r) = model.observationMatrix().row(m.channels[static_cast<std::size_t>(r)]) * y.matrix();
@@ -187,14 +193,28 @@ HorizonStep MovingHorizon::propose(const Measurement& m, const NoiseModel& noise
   *mean = mean_;
   *cov = cov_;
   if (m.channels.empty()) return s;
-  Eigen::VectorXd values, z0, r;
-  Eigen::MatrixXd j;
-  if (!predict(m, noise, mean_, &values, &z0, &j, &r)) {
-    s.update.finite = false;
-    return s;
+  // Iterated: when the update lands further than `shift` posterior std
+  // from where it was linearised (a wide prior, a load just re-opened), the
+  // sample is linearised again at that posterior mean, from the same prior.
+  at_ = mean_;
+  for (int pass = 0;; ++pass) {
+    Eigen::VectorXd values, z0, r;
+    Eigen::MatrixXd j;
+    *mean = mean_;
+    *cov = cov_;
+    if (!predict(m, noise, at_, &values, &z0, &j, &r)) {
+      s.update = UpdateDiagnostics();
+      s.update.finite = false;
+      return s;
+    }
+    s.update = UpdateDiagnostics();
+    linearUpdate(values, z0, j, r, at_, *mean, *cov, &s.update);
+    if (!s.update.finite || pass >= settings_.reruns) return s;
+    const Eigen::ArrayXd sd = cov->diagonal().head(parameters_).cwiseMax(0.0).cwiseSqrt().array();
+    const Eigen::ArrayXd away = (*mean - at_).head(parameters_).array().abs();
+    if (!((away / sd).maxCoeff() > settings_.shift)) return s;
+    at_ = *mean;
   }
-  linearUpdate(values, z0, j, r, mean_, *mean, *cov, &s.update);
-  return s;
 }
 
 void MovingHorizon::accept(const Measurement& m, HorizonStep& s, const Eigen::VectorXd& mean,
@@ -211,7 +231,7 @@ void MovingHorizon::accept(const Measurement& m, HorizonStep& s, const Eigen::Ve
     mean_ += s.damping * (mean - mean_);
     cov_ += s.damping * (cov - cov_);
   }
-  kept_.push_back({m, dt, mean_, used});
+  kept_.push_back({m, dt, at_, used});
   if (settings_.window > 0.0 && m.time - window_start_ >= settings_.window) endWindow(s);
 }
 
@@ -286,17 +306,156 @@ void MovingHorizon::restore(const Eigen::MatrixXd& coefficients) {
     mean_[last()] = angle_mean;
     cov_(last(), last()) = angle_cov(0, 0);
   }
+  recent_.clear();
   startWindow();
 }
 
 void MovingHorizon::reopen(const std::vector<int>& rows) {
-  for (int r : rows) {
-    mean_[r] = 0.0;
-    cov_.row(r).setZero();
-    cov_.col(r).setZero();
-    cov_(r, r) = 1.0;
+  if (!(angle_ && previous_time_ > 0.0 && reanchorAngle(rows))) {
+    for (int r : rows) {
+      mean_[r] = 0.0;
+      cov_.row(r).setZero();
+      cov_.col(r).setZero();
+      cov_(r, r) = 1.0;
+    }
   }
   startWindow();
+}
+
+bool MovingHorizon::reanchorAngle(const std::vector<int>& rows) {
+  // The model's roll angle is its static tilt under the parameters plus the
+  // gyro's integral since the start, so the angle's error e = tilt(vehicle,
+  // load) - tilt at the start's true load. From the first load change on,
+  // the tilt is taken at the start's load (its mean now: anchoredReadings),
+  // whatever the current load: e_new = e_old + tilt(anchor) - tilt(old
+  // load), linear in the old load around its mean (its spread moves into
+  // e), and the new load starts from its prior apart from the angle.
+  const int n = parameters_;
+  const int k = static_cast<int>(rows.size());
+  if (k == 0 || k >= n) return false;
+  const bool first = anchor_rows_.empty();
+  Eigen::MatrixXd t = Eigen::MatrixXd::Zero(n + 1, n + 1 + k);
+  for (int i = 0; i <= n; ++i) t(i, i) = 1.0;
+  if (first) {
+    const MechanicalModel& model = propagator_.model();
+    Eigen::MatrixXd zeta(n, k + 1);
+    for (int c = 0; c <= k; ++c) zeta.col(c) = mean_.head(n);
+    Eigen::VectorXd steps(k);
+    for (int j = 0; j < k; ++j) {
+      const int r = rows[static_cast<std::size_t>(j)];
+      steps[j] = theta(mean_.head(n))[r] + settings_.step * prior_std_[r] < upper_[r] ? settings_.step
+                                                                                      : -settings_.step;
+      zeta(r, 1 + j) += steps[j];
+    }
+    Eigen::MatrixXd th(n, k + 1);
+    for (int c = 0; c <= k; ++c) th.col(c) = theta(zeta.col(c));
+    const Eigen::MatrixXd full = propagator_.mapping().fullParameters(th);
+    for (int c = 0; c <= k; ++c) {
+      if (!model.invalidReason(full.col(c)).empty()) return false;
+    }
+    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(model.stateSize(), k + 1);
+    model.prepare(full)->readings(previous_time_, y);
+    evaluations_ += k + 1;
+    const Eigen::ArrayXd tilt = tilts(y);
+    if (!tilt.allFinite()) return false;
+    for (int j = 0; j < k; ++j) {
+      t(last(), rows[static_cast<std::size_t>(j)]) = -(tilt[1 + j] - tilt[0]) / steps[j];
+    }
+    anchor_rows_ = rows;
+    anchor_ = theta(mean_.head(n));
+  }
+  for (int j = 0; j < k; ++j) {
+    const int r = rows[static_cast<std::size_t>(j)];
+    t(r, r) = 0.0;
+    t(r, n + 1 + j) = 1.0;
+    mean_[r] = 0.0;
+  }
+  Eigen::MatrixXd joint = Eigen::MatrixXd::Zero(n + 1 + k, n + 1 + k);
+  joint.topLeftCorner(n + 1, n + 1) = cov_;
+  joint.bottomRightCorner(k, k).setIdentity();
+  const Eigen::MatrixXd cov = t * joint * t.transpose();
+  cov_ = 0.5 * (cov + cov.transpose());
+  return true;
+}
+
+Eigen::ArrayXd MovingHorizon::tilts(const Eigen::ArrayXXd& y) const {
+  const Eigen::MatrixXd& h = propagator_.model().observationMatrix();
+  const Eigen::ArrayXd ay = (h.row(accel_y_) * y.matrix()).transpose().array();
+  const Eigen::ArrayXd az = (h.row(accel_z_) * y.matrix()).transpose().array();
+  return ay.binaryExpr(az, [](double a, double b) { return std::atan2(a, b); });
+}
+
+bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y) {
+  // Each column twice: as it is and with the load at the anchor. The second
+  // gives the tilt the body has at the anchor (the gyro's integral is the
+  // same in both); accel_y and accel_z are turned to it (tare: no offsets).
+  const MechanicalModel& model = propagator_.model();
+  const Eigen::Index cols = th.cols();
+  Eigen::MatrixXd both(th.rows(), 2 * cols);
+  both.leftCols(cols) = th;
+  both.rightCols(cols) = th;
+  for (int r : anchor_rows_) both.row(r).tail(cols).setConstant(anchor_[r]);
+  const Eigen::MatrixXd full = propagator_.mapping().fullParameters(both);
+  for (Eigen::Index c = cols; c < 2 * cols; ++c) {
+    if (!model.invalidReason(full.col(c)).empty()) return false;
+  }
+  Eigen::ArrayXXd all = Eigen::ArrayXXd::Zero(model.stateSize(), 2 * cols);
+  model.prepare(full)->readings(time, all);
+  evaluations_ += 2 * cols;
+  const Eigen::ArrayXd tilt = tilts(all);
+  y = all.leftCols(cols);
+  const Eigen::MatrixXd& h = model.observationMatrix();
+  // The rows of y that accel_y and accel_z read (reading states: one each).
+  Eigen::Index row_y = -1, row_z = -1;
+  h.row(accel_y_).cwiseAbs().maxCoeff(&row_y);
+  h.row(accel_z_).cwiseAbs().maxCoeff(&row_z);
+  for (Eigen::Index c = 0; c < cols; ++c) {
+    const double d = tilt[cols + c] - tilt[c];
+    const double ay = y(row_y, c), az = y(row_z, c);
+    y(row_y, c) = ay * std::cos(d) + az * std::sin(d);
+    y(row_z, c) = az * std::cos(d) - ay * std::sin(d);
+  }
+  return y.allFinite();
+}
+
+void MovingHorizon::keepRecent(int count) {
+  recent_capacity_ = static_cast<std::size_t>(std::max(0, count));
+  while (recent_.size() > recent_capacity_) recent_.pop_front();
+}
+
+void MovingHorizon::remember(Recent r) {
+  if (recent_capacity_ == 0) return;
+  if (recent_.size() == recent_capacity_) recent_.pop_front();
+  recent_.push_back(std::move(r));
+}
+
+int MovingHorizon::samplesSinceChange(int within, const std::function<double(int)>& level) const {
+  const std::size_t span = std::min(recent_.size(), static_cast<std::size_t>(std::max(0, within)));
+  if (span == 0) return 0;
+  const std::size_t first = recent_.size() - span;
+  std::size_t start = recent_.size() - 1;
+  double sum = 0.0, best = -std::numeric_limits<double>::infinity();
+  for (std::size_t k = recent_.size(); k-- > first;) {
+    if (recent_[k].dof > 0) sum += recent_[k].nis - level(recent_[k].dof);
+    if (sum > best) {
+      best = sum;
+      start = k;
+    }
+  }
+  return static_cast<int>(recent_.size() - start);
+}
+
+std::vector<Measurement> MovingHorizon::rewind(int back) {
+  std::vector<Measurement> again;
+  if (back <= 0 || static_cast<std::size_t>(back) > recent_.size()) return again;
+  const std::size_t start = recent_.size() - static_cast<std::size_t>(back);
+  mean_ = recent_[start].mean;
+  cov_ = recent_[start].cov;
+  previous_time_ = recent_[start].previous_time;
+  for (std::size_t k = start; k < recent_.size(); ++k) again.push_back(std::move(recent_[k].m));
+  recent_.erase(recent_.begin() + static_cast<std::ptrdiff_t>(start), recent_.end());
+  startWindow();
+  return again;
 }
 
 void MovingHorizon::drift(const Eigen::VectorXd& intensity, double dt) {

@@ -21,6 +21,8 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <deque>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -51,16 +53,31 @@ class MovingHorizon {
   template <class Gate>
   HorizonStep process(const Measurement& m, const NoiseModel& noise, const Gate& gate_bound,
                       bool damp) {
+    Recent before{m, 0.0, 0, mean_, cov_, previous_time_};
     Eigen::VectorXd mean_after;
     Eigen::MatrixXd cov_after;
     HorizonStep s = propose(m, noise, &mean_after, &cov_after);
     if (s.update.finite) {
       const double bound = gate_bound(s.update.channels);
       if (bound > 0.0 && s.update.nis > bound) s.gated = true;
+      before.nis = s.update.nis;
+      before.dof = s.update.channels;
     }
     accept(m, s, mean_after, cov_after, damp);
+    remember(std::move(before));
     return s;
   }
+  // The last `count` samples' states are kept (0: none), so that a change
+  // can be rewound to (rewindToChange).
+  void keepRecent(int count);
+  // Among the last `within` samples kept, how many samples back the change
+  // most likely began: the start of the suffix whose NIS exceeds level(dof)
+  // by the most (a CUSUM change point; a level above the NIS's mean keeps
+  // the unchanged samples before it out). 0: none kept.
+  int samplesSinceChange(int within, const std::function<double(int)>& level) const;
+  // Back to the state before the sample `back` samples ago (1: the last);
+  // returns the samples from there on, to be processed again; ends the window.
+  std::vector<Measurement> rewind(int back);
   // The parameters' expansion (count x S): affine, mean and covariance exact.
   Eigen::MatrixXd coefficients() const;
   // Sets the Gaussian from an affine expansion (a checkpoint); ends the window.
@@ -71,6 +88,7 @@ class MovingHorizon {
   // Random walk: variance intensity_i^2 dt added to parameter i.
   void drift(const Eigen::VectorXd& intensity, double dt);
   long evaluations() const { return evaluations_; }
+  double lastTime() const { return previous_time_; }  // the last sample's time
   // True for channels whose roll angle integrates the gyro: accel_y,
   // accel_z and gyro_x, and no pitch (the roll plane).
   static bool carriesRollAngle(const std::vector<std::string>& channels);
@@ -79,6 +97,17 @@ class MovingHorizon {
   double rollAngleErrorStd() const { return angle_ ? std::sqrt(cov_(last(), last())) : 0.0; }
 
  private:
+  struct Recent {  // a sample and the state before it
+    Measurement m;
+    double nis = 0.0;  // 0 with dof 0: not finite
+    int dof = 0;
+    Eigen::VectorXd mean;
+    Eigen::MatrixXd cov;
+    double previous_time = 0.0;
+  };
+  void remember(Recent r);
+  std::deque<Recent> recent_;
+  std::size_t recent_capacity_ = 0;
   struct Kept {
     Measurement m;
     double dt = 0.0;
@@ -95,6 +124,16 @@ class MovingHorizon {
                Eigen::VectorXd* values, Eigen::VectorXd* z0, Eigen::MatrixXd* jacobian,
                Eigen::VectorXd* variances);
   void endWindow(HorizonStep& s);
+  // reopen() with the roll angle carried: the angle's error moved to the
+  // new load's static tilt (false: not possible, nothing changed).
+  bool reanchorAngle(const std::vector<int>& rows);
+  // The roll angles atan2(accel_y, accel_z) of readings y (one per column).
+  Eigen::ArrayXd tilts(const Eigen::ArrayXXd& y) const;
+  // Readings of parameter columns th (theta) with the angle at the anchor's
+  // tilt (after a load change); false: not admissible or not finite.
+  bool anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y);
+  std::vector<int> anchor_rows_;  // the load's rows, once a load change came
+  Eigen::VectorXd anchor_;        // theta: the load at the start (its mean then)
   void startWindow();
   Eigen::VectorXd theta(const Eigen::VectorXd& zeta) const {
     return prior_mean_ + prior_std_.cwiseProduct(zeta);
@@ -111,6 +150,7 @@ class MovingHorizon {
   MovingHorizonSettings settings_;
   Eigen::VectorXd prior_mean_, prior_std_, lower_, upper_;
   Eigen::VectorXd mean_;  // zeta
+  Eigen::VectorXd at_;    // where the last sample was linearised
   Eigen::MatrixXd cov_;
   Eigen::VectorXd window_mean_;  // the window's prior
   Eigen::MatrixXd window_cov_;

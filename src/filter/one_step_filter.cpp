@@ -2,6 +2,7 @@
 #include "pc_ekf/filter/prior_correction.h"
 #include "pc_ekf/filter/reopen_chance.h"
 
+#include <algorithm>
 #include <cmath>
 #include <condition_variable>
 #include <limits>
@@ -142,6 +143,23 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
   if (settings_.reopen.mode == ReopenMode::kLoad && (!horizon_ || load_rows_.empty())) {
     throw std::invalid_argument(
         "reopen mode load needs filter.linearization: mean and an uncertain added_mass");
+  }
+  // A load change is rewound to where it began: the violation run and the
+  // NIS window before it, twice over for a change that builds up slowly.
+  if (settings_.reopen.mode == ReopenMode::kLoad) {
+    const MechanicalModel& model = propagator_->model();
+    if (model.zero() == ZeroConvention::kRest) {
+      throw std::invalid_argument(
+          "reopen mode load needs measurement.zero: tare (with rest the readings' zero is the "
+          "vehicle with the load it started with)");
+    }
+    const auto& ch = model.channelNames();
+    if (std::find(ch.begin(), ch.end(), "gyro_y") != ch.end()) {
+      throw std::invalid_argument(
+          "reopen mode load: a model whose body angles integrate gyro_x and gyro_y from the "
+          "start (the full car) is not supported yet");
+    }
+    horizon_->keepRecent(changeSpan());
   }
   startRelinearization();
   // The re-open rule's chance rate, simulated once per process: here, before
@@ -425,10 +443,7 @@ StepResult OneStepFilter::step(const Measurement& m) {
     r.reopened = true;
     r.load_reset = settings_.reopen.mode == ReopenMode::kLoad;
     r.health.reopened = true;
-    if (r.load_reset) {  // the samples that showed the change are no misfit
-      rates_.excuse(violations_ - 1);
-      r.health.gated = r.health.damped = false;
-    }
+    if (r.load_reset) reloadFromChange(r);
     violations_ = 0;
   }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
@@ -453,6 +468,81 @@ void OneStepFilter::reopen() {
   }
   horizon_->reopen(rows);
   x_.bottomRows(np) = horizon_->coefficients();
+}
+
+double OneStepFilter::changeLevel(int dof) {
+  // The NIS's 0.99 quantile: a sample of the unchanged load is below it 99
+  // times in 100, so the change point is rarely placed before the change.
+  if (dof >= static_cast<int>(change_level_.size())) {
+    change_level_.resize(static_cast<std::size_t>(dof) + 1, -1.0);
+  }
+  double& q = change_level_[static_cast<std::size_t>(dof)];
+  if (q < 0.0) q = chiSquareQuantile(0.99, dof);
+  return q;
+}
+
+int OneStepFilter::changeSpan() const {
+  return settings_.reopen.after + 2 * settings_.health.nis_window;
+}
+
+void OneStepFilter::reloadFromChange(StepResult& r) {
+  // The samples since the change began describe the new load: the filter
+  // goes back to its state before them (so the vehicle values keep only what
+  // the old load's samples taught), the load starts from its prior, and those
+  // samples are assimilated again. Their first verdicts (gated, damped: the
+  // change seen through the old load) are replaced by the new ones. The
+  // first samples of a change can be transitional (a sensor's averaging, the
+  // load settling): the change point is moved on, up to kChangeShifts
+  // samples, until the new load explains every sample after it (no gated).
+  constexpr int kChangeShifts = 5;
+  const int np = propagator_->parameterCount();
+  const int back = horizon_->samplesSinceChange(violations_ + settings_.health.nis_window,
+                                                [this](int dof) { return changeLevel(dof); });
+  const auto gate = [this](int dof) {
+    return settings_.innovation_gate > 0.0 ? gateBound(dof) : 0.0;
+  };
+  const MovingHorizon before(*horizon_);
+  std::unique_ptr<MovingHorizon> best;
+  std::vector<SampleVerdict> best_verdicts;
+  HorizonStep best_last;
+  int best_gated = std::numeric_limits<int>::max();
+  for (int shift = 0; shift <= kChangeShifts && shift < back; ++shift) {
+    auto trial = std::make_unique<MovingHorizon>(before);
+    const std::vector<Measurement> again = trial->rewind(back - shift);
+    trial->reopen(load_rows_);
+    std::vector<SampleVerdict> verdicts(static_cast<std::size_t>(shift));  // the change itself
+    HorizonStep h;
+    int gated = 0;
+    for (const Measurement& m : again) {
+      if (settings_.drift.size() != 0) trial->drift(settings_.drift, m.time - trial->lastTime());
+      h = trial->process(m, settings_.noise, gate, settings_.support == SupportRule::kDamp);
+      verdicts.push_back({h.gated, h.damping < 1.0});
+      gated += h.gated;
+    }
+    if (gated < best_gated) {
+      best = std::move(trial);
+      best_verdicts = std::move(verdicts);
+      best_last = h;
+      best_gated = gated;
+    }
+    if (gated == 0) break;
+  }
+  if (!best) {  // nothing kept to rewind to: the load afresh from here
+    horizon_->reopen(load_rows_);
+  } else {
+    horizon_ = std::move(best);
+    change_samples_ = static_cast<int>(best_verdicts.size());
+    r.gated = r.health.gated = best_verdicts.back().gated;
+    r.health.damped = best_verdicts.back().damped;
+    r.damping = best_last.damping;
+    r.update = best_last.update;
+    best_verdicts.pop_back();  // this sample's verdict is added to the rates below
+    rejected_ += rates_.revise(best_verdicts);
+  }
+  x_.bottomRows(np) = horizon_->coefficients();
+  r.coefficients = x_.bottomRows(np);
+  r.mean = pcMean(r.coefficients);
+  r.stddev = pcStddev(r.coefficients);
 }
 
 void OneStepFilter::horizonUpdate(const Measurement& m, double dt, StepResult& r) {

@@ -114,6 +114,13 @@ class OneStepFilter {
   void collocationUpdate(const Measurement& m, double dt, StepResult& r);
   void horizonUpdate(const Measurement& m, double dt, StepResult& r);
   void reopen();
+  // reopen.mode load: back to where the change began, the load afresh, the
+  // samples since then again (r: this sample's result, updated).
+  void reloadFromChange(StepResult& r);
+  int changeSpan() const;  // samples the horizon keeps for that
+  double changeLevel(int dof);  // NIS level above which a sample counts as changed
+  std::vector<double> change_level_;
+  int change_samples_ = 0;  // samples re-assimilated at the last load change
   // Re-runs the kept samples from a working prior around r; r when impossible.
   StepResult relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed);
   // The working prior's parameter coefficients around r (false: none).

@@ -134,14 +134,21 @@ RateCheck SafeguardRateMonitor::poisson(long count, double exposure, double rate
   return c;
 }
 
-void SafeguardRateMonitor::excuse(int count) {
-  for (auto e = events_.rbegin(); e != events_.rend() && count > 0; ++e, --count) {
-    window_.gated -= e->gated;
-    run_.gated -= e->gated;
-    window_.damped -= e->damped;
-    run_.damped -= e->damped;
-    e->gated = e->damped = false;
+int SafeguardRateMonitor::revise(const std::vector<SampleVerdict>& verdicts) {
+  int change = 0;
+  auto e = events_.rbegin();
+  for (auto v = verdicts.rbegin(); v != verdicts.rend() && e != events_.rend(); ++v, ++e) {
+    const int gated = static_cast<int>(v->gated) - static_cast<int>(e->gated);
+    const int damped = static_cast<int>(v->damped) - static_cast<int>(e->damped);
+    window_.gated += gated;
+    run_.gated += gated;
+    window_.damped += damped;
+    run_.damped += damped;
+    change += gated;
+    e->gated = v->gated;
+    e->damped = v->damped;
   }
+  return change;
 }
 
 SafeguardRates SafeguardRateMonitor::add(double time, bool gated, bool damped, bool reopened,

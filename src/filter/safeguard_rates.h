@@ -57,6 +57,10 @@ struct SafeguardRates {
 double binomialUpperTail(long k, long n, double p);
 double poissonUpperTail(long k, double mu);
 
+struct SampleVerdict {
+  bool gated = false, damped = false;
+};
+
 class SafeguardRateMonitor {
  public:
   explicit SafeguardRateMonitor(const RateSettings& settings = RateSettings());
@@ -70,10 +74,11 @@ class SafeguardRateMonitor {
                      double reopen_chance = 0.0);
   long samples() const { return run_.samples; }
   const RateSettings& settings() const { return settings_; }
-  // The last `count` samples were gated or damped because the load changed
-  // (a load change detected after them: reopen mode load): they count as
-  // neither (the change counts as a re-open).
-  void excuse(int count);
+  // The last verdicts.size() samples were assimilated again (a load change
+  // rewound to where it began: reopen mode load): their gated and damped
+  // counts become the new verdicts' (oldest first). Returns the change in
+  // the gated count.
+  int revise(const std::vector<SampleVerdict>& verdicts);
 
  private:
   struct Counts {

@@ -35,12 +35,15 @@ std::vector<Eigen::MatrixXd> simulateScheduled(const MechanicalModel& model,
   Eigen::ArrayXXd y = batch->initialState();
   double t = 0.0;
   std::size_t next = 0;
+  const Eigen::VectorXd* current = &params;
   for (double tk : times) {
     while (next < schedule.size() && schedule[next].time <= tk) {
       const double tc = std::max(t, schedule[next].time);
       integrate(model, *batch, t, tc, y, settings);
       t = tc;
-      batch = model.prepare(schedule[next].params);  // y carried over unchanged
+      if (schedule[next].settle) model.carryOver(*current, schedule[next].params, y);
+      current = &schedule[next].params;
+      batch = model.prepare(*current);
       ++next;
     }
     integrate(model, *batch, t, tk, y, settings);

@@ -42,6 +42,10 @@ struct TimingImperfections {
 struct ParameterChange {
   double time = 0.0;
   Eigen::VectorXd params;
+  // true: the body stays where it is and settles to the new equilibrium
+  // (MechanicalModel::carryOver); false: the state's deviations are kept,
+  // so the body jumps to the new equilibrium.
+  bool settle = false;
 };
 
 struct SyntheticDataSettings {

@@ -95,6 +95,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"truth.timing.drop_fraction", "number", "0", "[0, 1] (1 refused)", "each sample lost with this probability"},
       {"truth.timing.seed", "unsigned", "1", "[0, 2^64)", "the timing's own generator (the noise draws stay as they are)"},
       {"truth.schedule", "list", "[]", "changes, times increasing", "quasi-static parameter changes: at each time the state carries over and integration goes on with the new parameters; `synthesize_bag` then writes `ground_truth` per sample"},
+      {"truth.load_change", "choice", "jump", "jump or settle", "how the body meets a scheduled change: `jump` keeps the state's deviations from the static equilibrium, so the body is at the new equilibrium at once; `settle` keeps every mass where it is, so the body sinks and tilts to it over the suspension's own motion as a real load change does (the roll plane; other models jump)"},
       {"truth.schedule[i].time", "number", "required", "(0, inf), after the previous change", "s"},
       {"truth.schedule[i].xi", "numbers", "the previous values", "one per uncertain: entry (or values:)", "every germ coordinate from `time` on"},
       {"truth.schedule[i].values.<name>", "number", "the previous value", "any (or xi:)", "the physical value of an uncertain parameter from `time` on; the ones not named keep theirs"},

@@ -303,7 +303,9 @@ SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const Mechanic
   s.integration = c.integration;
   s.sensor = c.truth.sensor;
   s.timing = c.truth.timing;
-  for (const auto& ch : c.truth.schedule) s.schedule.push_back({ch.time, fullAt(c, truth, ch.xi)});
+  for (const auto& ch : c.truth.schedule) {
+    s.schedule.push_back({ch.time, fullAt(c, truth, ch.xi), c.truth.settle_changes});
+  }
   return s;
 }
 

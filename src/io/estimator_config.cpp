@@ -554,6 +554,12 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
   g.unsignedInteger("seed", c.truth.timing.seed);
   g.finish();
 
+  std::string load_change = "jump";
+  t.text("load_change", load_change);
+  if (load_change != "jump" && load_change != "settle") {
+    t.fail("load_change", "'" + load_change + "'", "jump or settle");
+  }
+  c.truth.settle_changes = load_change == "settle";
   const YAML::Node seq = t.sequence("schedule");
   for (std::size_t i = 0; seq.IsDefined() && !seq.IsNull() && i < seq.size(); ++i) {
     const bool first = c.truth.schedule.empty();

@@ -93,6 +93,8 @@ struct TruthConfig {
   SensorImperfections sensor;  // per model channel
   TimingImperfections timing;
   std::vector<TruthChange> schedule;  // times increasing, > 0
+  // truth.load_change: settle (true: the body stays put and settles) | jump.
+  bool settle_changes = false;
   // The road the truth drives on (truth.road; unset: the config's road). A
   // road-free config (road.source: none) needs it for synthetic drives.
   std::shared_ptr<const RoadConfig> road;

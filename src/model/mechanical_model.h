@@ -128,6 +128,14 @@ class MechanicalModel {
   // params: parameterNames().size() x Q. Columns must be admissible.
   virtual std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const = 0;
 
+  // The parameters change from `from` to `to` with the body where it is (a
+  // load put on or taken off at a stop): the state y (one column) is moved
+  // to the deviations under `to` that put every mass at the same absolute
+  // place, velocities unchanged. Default: y unchanged (a model whose states
+  // do not depend on the parameters' equilibrium).
+  virtual void carryOver(const Eigen::VectorXd& /*from*/, const Eigen::VectorXd& /*to*/,
+                         Eigen::ArrayXXd& /*y*/) const {}
+
   // Kinks of the model's inputs in (t0, t1) (see RoadInput::breakpoints).
   virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
 

@@ -455,4 +455,22 @@ std::vector<double> RollPlaneModel::breakpoints(double t0, double t1) const {
   return road_->breakpoints(t0, t1);
 }
 
+void RollPlaneModel::carryOver(const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                               Eigen::ArrayXXd& y) const {
+  Eigen::MatrixXd both(from.size(), 2);
+  both.col(0) = from;
+  both.col(1) = to;
+  const std::vector<StaticEquilibrium> e = solveStaticEquilibria(both);
+  const RollPlaneFields<int>& at = rollPlaneRows();
+  for (int i = 0; i < 2; ++i) {
+    const auto tyre = [&](int k) {
+      const Eigen::VectorXd& p = k == 0 ? from : to;
+      return (e[static_cast<std::size_t>(k)].load[i] + p[at.unsprung_mass[i]] * p[at.gravity]) /
+             p[at.tyre_stiffness[i]];
+    };
+    y.row(i) += e[0].height[i] - e[1].height[i];
+    y.row(2 + i) += tyre(1) - tyre(0);  // the unsprung mass sits at minus its tyre's compression
+  }
+}
+
 }  // namespace pc_ekf

@@ -96,6 +96,11 @@ class RollPlaneModel : public MechanicalModel {
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
   std::vector<double> breakpoints(double t0, double t1) const override;
+  // x_i and xr_i keep their absolute heights (the equilibria's mount heights
+  // and tyre compressions); the readings kept as states follow at the next
+  // integration's end.
+  void carryOver(const Eigen::VectorXd& from, const Eigen::VectorXd& to,
+                 Eigen::ArrayXXd& y) const override;
 
   const std::vector<std::string>& stateNames() const override { return state_names_; }
   int readingCount() const override { return readings_.as_states ? 7 : 0; }

@@ -72,18 +72,38 @@ TEST(MovingHorizon, TheCollocationFilterOnTheSameDriveIsFlagged) {
   EXPECT_TRUE(!r.healthy || worstError(r) > 3.0);
 }
 
-TEST(MovingHorizon, ALoadChangeIsFoundAndTheNewLoadEstimated) {
-  YAML::Node root = vehicleImu(40.0, "tare");
+// Two load changes, the body settling to each as a real load does (truth
+// load_change: settle): each is found once and the last load is estimated.
+TEST(MovingHorizon, LoadChangesAreFoundAndTheNewLoadEstimated) {
+  YAML::Node root = vehicleImu(45.0, "tare");
   root["filter"]["reopen"]["mode"] = "load";
   root["filter"]["reopen"]["after"] = 20;
-  root["truth"]["schedule"] =
-      YAML::Load("[{time: 20.0, values: {added_mass: 280.0, added_mass_position: 0.9}}]");
+  root["truth"]["load_change"] = "settle";
+  root["truth"]["schedule"] = YAML::Load(
+      "[{time: 15.0, values: {added_mass: 280.0, added_mass_position: 0.9}},"
+      " {time: 30.0, values: {added_mass: 120.0, added_mass_position: 0.65}}]");
   const OfflineResult r = estimate(root, 2);
-  EXPECT_EQ(r.reopened, 1);
+  EXPECT_EQ(r.reopened, 2);
   const ParameterSummary& m = named(r, "added_mass");
   const ParameterSummary& d = named(r, "added_mass_position");
-  EXPECT_LT(std::abs(m.mean - 280.0), 3.0 * m.stddev) << m.mean << " +- " << m.stddev;
-  EXPECT_LT(std::abs(d.mean - 0.9), 3.0 * d.stddev) << d.mean << " +- " << d.stddev;
+  EXPECT_LT(std::abs(m.mean - 120.0), 3.0 * m.stddev) << m.mean << " +- " << m.stddev;
+  EXPECT_LT(std::abs(d.mean - 0.65), 3.0 * d.stddev) << d.mean << " +- " << d.stddev;
+  EXPECT_LT(m.stddev, 5.0);
+  // Health and the vehicle values after changes are not yet promised: over
+  // seeds 2-6, one run ends flagged and one has a spring at 3.04 std.
+}
+
+// With zero: rest the readings' zero is the start's load, which a load
+// change leaves behind: refused by name.
+TEST(MovingHorizon, ReopenModeLoadNeedsTare) {
+  YAML::Node root = vehicleImu(2.0, "rest");
+  root["filter"]["reopen"]["mode"] = "load";
+  try {
+    estimate(root, 1);
+    FAIL() << "not refused";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("zero: tare"), std::string::npos) << e.what();
+  }
 }
 
 TEST(MovingHorizon, AVehicleTheDataDoNotFollowIsFlagged) {
