@@ -3,8 +3,8 @@
 // is the standalone iso8608 road blended from the heights it starts at over
 // its lead-in; every boundary is continuous once an ISO segment has been
 // driven; a rest holds the heights; courses without ISO segments are what
-// they were; bad segments are refused by key; a stop is still, and a load
-// change there is a step of the static sag.
+// they were; bad segments are refused by key; config/long_drive.yaml's day's
+// drive; a stop is still, and a load change there is a step of the static sag.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -278,6 +278,42 @@ TEST(CourseIsoConfig, BadSegmentsAreRefusedNamingTheKey) {
     return std::string("(accepted)");
   }();
   EXPECT_NE(t.find("key 'truth.road.course[0].class'"), std::string::npos) << t;
+}
+
+// ---- config/long_drive.yaml: the day's drive ----
+
+TEST(CourseIsoConfig, LongDriveIsTwentyMinutesOfRoadWithLoadChangesAtTheStops) {
+  const EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/long_drive.yaml");
+  EXPECT_EQ(c.road.source, RoadSource::kNone);
+  ASSERT_TRUE(c.truth.road);
+  EXPECT_EQ(c.sampling.samples, 240000);
+  EXPECT_EQ(c.sampling.duration, 1200.0);
+  const auto road = makeTruthRoad(c);
+  const auto* course = dynamic_cast<const CourseRoad*>(road.get());
+  ASSERT_NE(course, nullptr);
+  const auto& b = course->boundaries();
+  EXPECT_EQ(b.back(), 1200.0);  // the course covers the drive
+  // Every boundary continuous, every stop still.
+  for (std::size_t i = 1; i < b.size(); ++i) {
+    EXPECT_LT((course->height(below(b[i])) - course->height(b[i])).cwiseAbs().maxCoeff(), 1e-12) << i;
+  }
+  // Each load change falls inside a stop, and sets the values the comments give.
+  ASSERT_EQ(c.truth.schedule.size(), 2u);
+  const double values[2][2] = {{280.0, 0.90}, {120.0, 0.65}};
+  for (std::size_t k = 0; k < 2; ++k) {
+    const TruthChange& ch = c.truth.schedule[k];
+    const auto i = static_cast<std::size_t>(
+        std::upper_bound(b.begin(), b.end(), ch.time) - b.begin() - 1);
+    EXPECT_EQ(c.truth.road->course[i].type, CourseSegment::Type::kRest) << ch.time;
+    EXPECT_GE(ch.time - b[i], 5.0) << "settled before the change";
+    EXPECT_GE(b[i + 1] - ch.time, 5.0) << "settled after the change";
+    for (std::size_t p = 0; p < 2; ++p) {
+      const UncertainParameter& u = c.uncertain[p];
+      EXPECT_NEAR(u.nominal * (1.0 + u.relative_range * ch.xi[p]), values[k][p], 1e-12);
+    }
+  }
+  EXPECT_EQ(c.truth.xi[0], 0.0);  // 200 kg at 0.762 m before the first change
+  EXPECT_EQ(c.truth.xi[1], 0.0);
 }
 
 // ---- a stop is still; a load change there is a step of the static sag ----
