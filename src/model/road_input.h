@@ -124,9 +124,9 @@ struct CourseSegment {
 //    A stop after it therefore holds the heights where the vehicle stopped
 //    (speed changes are instantaneous: a kink at the boundary).
 // After the last segment the road stays at the level the last one left.
-// Levels are 0 until an iso8608 segment has been driven, so courses of
-// speed bumps, sines and rests are what they were before iso8608 segments
-// existed (flat road at 0 between and after them), bit for bit.
+// Levels are 0 until an iso8608 segment has been driven: a course of speed
+// bumps, sines and rests is flat road at exactly 0 between and after them,
+// its bumps and sines the standalone roads' heights bit for bit.
 class CourseRoad : public RoadInput {
  public:
   // Throws std::invalid_argument for no segments, a bad bump, a duration <= 0,
