@@ -76,7 +76,19 @@ void readSine(YamlMapReader& n, SineSettings& s) {
   n.number("right_sign", s.right_sign, -1.0, 1.0);
 }
 
-// Segments default to the road.speed_bump / road.sine settings.
+// An ISO 8608 class key: one letter A..E.
+void readIsoClass(YamlMapReader& r, char& road_class) {
+  std::string text(1, road_class);
+  r.text("class", text);
+  if (text.size() != 1 || text[0] < 'A' || text[0] > 'E') {
+    r.fail("class", "'" + text + "'", "A, B, C, D or E (ISO 8608)");
+  }
+  road_class = text[0];
+}
+
+// Segments default to the road.speed_bump / road.sine settings; an iso8608
+// segment to road.iso8608 and road.speed_kmh, its seed to road.iso8608.seed
+// plus its index in the course (so that segments are not copies).
 std::vector<CourseSegment> readCourse(YamlMapReader& r, const RoadConfig& road) {
   std::vector<CourseSegment> out;
   const YAML::Node seq = r.sequence("course");
@@ -86,6 +98,10 @@ std::vector<CourseSegment> readCourse(YamlMapReader& r, const RoadConfig& road) 
     CourseSegment seg;
     std::string type;
     e.text("type", type);
+    const auto duration = [&] {
+      if (!e.has("duration")) e.fail("duration", "(empty)", "a positive duration in s");
+      e.number("duration", seg.duration, 0.0, kInf, true);
+    };
     if (type == "speed_bump") {
       seg.type = CourseSegment::Type::kSpeedBump;
       seg.speed_bump = road.speed_bump;
@@ -94,10 +110,24 @@ std::vector<CourseSegment> readCourse(YamlMapReader& r, const RoadConfig& road) 
       seg.type = type == "sine" ? CourseSegment::Type::kSine : CourseSegment::Type::kRest;
       seg.sine = road.sine;
       if (type == "sine") readSine(e, seg.sine);
-      if (!e.has("duration")) e.fail("duration", "(empty)", "a positive duration in s");
-      e.number("duration", seg.duration, 0.0, kInf, true);
+      duration();
+    } else if (type == "iso8608") {
+      seg.type = CourseSegment::Type::kIso8608;
+      seg.iso8608 = road.iso8608;
+      seg.iso8608.seed = road.iso8608.seed + i;  // mod 2^64
+      seg.speed_kmh = road.speed_kmh;
+      if (!(road.iso8608.lead_in > 0.0)) {
+        r.fail("iso8608.lead_in", "0",
+               "a lead-in > 0 m when the course has iso8608 segments (each blends from the "
+               "heights it starts at over it)");
+      }
+      e.number("speed_kmh", seg.speed_kmh, 0.0, 1000.0, true);
+      readIsoClass(e, seg.iso8608.road_class);
+      e.unsignedInteger("seed", seg.iso8608.seed);
+      e.number("correlation", seg.iso8608.correlation, 0.0, 1.0);
+      duration();
     } else {
-      e.fail("type", "'" + type + "'", "speed_bump, sine or rest");
+      e.fail("type", "'" + type + "'", "speed_bump, sine, rest or iso8608");
     }
     e.finish();
     out.push_back(seg);
@@ -122,12 +152,7 @@ RoadConfig readRoad(YamlMapReader r) {
   r.number("speed_kmh", road.speed_kmh, 0.0, 1000.0, true);
 
   YamlMapReader iso = r.map("iso8608");
-  std::string road_class(1, road.iso8608.road_class);
-  iso.text("class", road_class);
-  if (road_class.size() != 1 || road_class[0] < 'A' || road_class[0] > 'E') {
-    iso.fail("class", "'" + road_class + "'", "A, B, C, D or E (ISO 8608)");
-  }
-  road.iso8608.road_class = road_class[0];
+  readIsoClass(iso, road.iso8608.road_class);
   iso.unsignedInteger("seed", road.iso8608.seed);
   iso.number("correlation", road.iso8608.correlation, 0.0, 1.0);
   iso.number("lead_in", road.iso8608.lead_in, 0.0, 1e6);

@@ -142,18 +142,46 @@ void RoadFreeStream::updateInputNoise() {
   inherited_at_ = model_->inputNoiseBySample(absolute_, relative_, mean_accel_z);
 }
 
+bool RoadFreeStream::waitingForInputs(const Measurement& m) const {
+  if (!inputs_->empty()) return false;
+  for (int ch : input_channels_) {
+    const auto it = std::find(m.channels.begin(), m.channels.end(), ch);
+    if (it == m.channels.end() || std::isnan(m.values[static_cast<Eigen::Index>(it - m.channels.begin())])) {
+      return true;
+    }
+  }
+  return false;
+}
+
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
   RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record));
   RoadFreeRecord r;
   r.outputs.reserve(record.size());
+  std::string first_problem;
+  const auto where = [&](std::size_t k) {
+    return "sample " + std::to_string(k + 1) + " (t = " + std::to_string(record[k].time) + " s)";
+  };
   for (std::size_t k = 0; k < record.size(); ++k) {
     Measurement out;
+    const bool waiting = std::isfinite(record[k].time) && stream.waitingForInputs(record[k]);
     const std::string problem = stream.add(record[k], &out);
+    if (!problem.empty() && waiting) {  // as estimator_node: dropped
+      if (r.dropped++ == 0) first_problem = where(k) + ": " + problem;
+      continue;
+    }
     if (!problem.empty()) {
-      throw ConfigError(c.source + ": road.source none: sample " + std::to_string(k + 1) +
-                        " (t = " + std::to_string(record[k].time) + " s): " + problem);
+      throw ConfigError(c.source + ": road.source none: " + where(k) + ": " + problem);
     }
     r.outputs.push_back(std::move(out));
+  }
+  if (r.outputs.empty() && r.dropped > 0) {
+    throw ConfigError(c.source + ": road.source none: no sample has every road-free input (" +
+                      std::to_string(r.dropped) + " samples; " + first_problem + ")");
+  }
+  if (r.dropped > 0) {
+    r.warning = std::to_string(r.dropped) + " sample(s) before every road-free input had been "
+                "read dropped, as estimator_node drops them (from " + first_problem +
+                "); the record goes on from sample " + std::to_string(r.dropped + 1);
   }
   r.model = stream.model();
   return r;

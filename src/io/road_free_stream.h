@@ -44,6 +44,11 @@ class RoadFreeStream {
   // (Measurement::extra_covariance). Returns "" or why the sample was refused (an input not
   // read yet, a time not after the last); then nothing changes.
   std::string add(const Measurement& m, Measurement* out);
+  // True while no sample has been taken and `m` lacks one of the inputs
+  // (absent or NaN): add() refuses it, "not read yet", as there is nothing
+  // to hold that input at. Such samples are dropped (estimator_node rejects
+  // them; roadFreeRecord drops and counts them).
+  bool waitingForInputs(const Measurement& m) const;
 
  private:
   // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +
@@ -73,11 +78,16 @@ class RoadFreeStream {
   MechanicalModel::SampleInputNoise inherited_at_;
 };
 
-// A whole record through the stream: the model and the outputs. Throws
-// ConfigError naming the sample a stream would refuse.
+// A whole record through the stream: the model and the outputs. The samples
+// before every input has been read (an IMU that starts after the suspension
+// sensors) are dropped, as estimator_node drops them, and counted; the rest
+// of the record is kept. Throws ConfigError naming any other sample a stream
+// would refuse, or when no sample has every input.
 struct RoadFreeRecord {
   std::shared_ptr<const MechanicalModel> model;
   MeasurementSeries outputs;
+  std::size_t dropped = 0;  // samples before every input had been read
+  std::string warning;      // what was dropped ("" when nothing)
 };
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
 

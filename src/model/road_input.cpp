@@ -5,6 +5,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "pc_ekf/model/road_profile.h"
+
 namespace pc_ekf {
 
 namespace {
@@ -22,6 +24,28 @@ void addCorners(const SpeedBumpSettings& s, double start, double t0, double t1,
     if (t > t0 && t < t1) out.push_back(t);
   }
 }
+
+// An iso8608 course segment in its own time tau (CourseRoad): the profile
+// driven at `speed` (both tracks at distance speed * tau, as
+// DrivenProfileRoad's two contacts), blended from `from` over the lead-in.
+class CourseIso8608 : public RoadInput {
+ public:
+  CourseIso8608(const Iso8608Settings& s, double speed, const Eigen::Vector2d& from)
+      : profile_(s), speed_(speed), lead_in_(s.lead_in), from_(from) {}
+  Eigen::Vector2d height(double tau) const override {
+    const double s = speed_ * tau;
+    Eigen::Vector2d h(profile_.height(0, s), profile_.height(1, s));
+    if (from_[0] != 0.0 || from_[1] != 0.0) h += (1.0 - iso8608LeadIn(s, lead_in_)) * from_;
+    return h;
+  }
+  // Smooth, as the standalone profile (the lead-in is C1).
+  std::vector<double> breakpoints(double, double) const override { return {}; }
+
+ private:
+  Iso8608Profile profile_;
+  double speed_, lead_in_;
+  Eigen::Vector2d from_;
+};
 
 std::string describeTime(const std::string& what, double t) {
   std::ostringstream os;
@@ -101,28 +125,55 @@ double CourseRoad::speedBumpDuration(const SpeedBumpSettings& s) {
 CourseRoad::CourseRoad(std::vector<CourseSegment> segments) {
   if (segments.empty()) throw std::invalid_argument("CourseRoad: no segments");
   start_.push_back(0.0);
-  for (const auto& seg : segments) {
+  level_.push_back(Eigen::Vector2d::Zero());
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const CourseSegment& seg = segments[i];
     double d = seg.duration;
+    bool blends = false;
     if (seg.type == CourseSegment::Type::kSpeedBump) {
       roads_.push_back(std::make_unique<SpeedBumpRoad>(seg.speed_bump));
       d = speedBumpDuration(seg.speed_bump);
     } else if (seg.type == CourseSegment::Type::kSine) {
       roads_.push_back(std::make_unique<SineRoad>(seg.sine));
+    } else if (seg.type == CourseSegment::Type::kIso8608) {
+      const std::string who = "CourseRoad: segment " + std::to_string(i) + " (iso8608)";
+      if (!(seg.speed_kmh > 0.0) || !std::isfinite(seg.speed_kmh)) {
+        throw std::invalid_argument(who + ": speed_kmh must be finite and > 0");
+      }
+      if (!(seg.iso8608.lead_in > 0.0) || !std::isfinite(seg.iso8608.lead_in)) {
+        throw std::invalid_argument(who + ": lead_in must be finite and > 0 (the segment "
+                                    "blends from the heights it starts at over it)");
+      }
+      try {
+        roads_.push_back(
+            std::make_unique<CourseIso8608>(seg.iso8608, seg.speed_kmh / 3.6, level_.back()));
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(who + ": " + e.what());
+      }
+      blends = true;
     } else {
       roads_.push_back(nullptr);
     }
     if (!(d > 0.0) || !std::isfinite(d)) {
       throw std::invalid_argument("CourseRoad: segment duration must be finite and > 0");
     }
+    blends_.push_back(blends);
     start_.push_back(start_.back() + d);
+    // An iso8608 segment leaves the heights it ended at (its own time d);
+    // every other segment the level it started from.
+    level_.push_back(blends ? roads_.back()->height(d) : level_.back());
   }
 }
 
 Eigen::Vector2d CourseRoad::height(double t) const {
-  if (t >= start_.back()) return Eigen::Vector2d::Zero();
+  if (t >= start_.back()) return level_.back();
   const std::size_t i =
       t < start_[1] ? 0 : std::upper_bound(start_.begin(), start_.end(), t) - start_.begin() - 1;
-  return roads_[i] ? roads_[i]->height(t - start_[i]) : Eigen::Vector2d::Zero();
+  if (!roads_[i]) return level_[i];
+  Eigen::Vector2d h = roads_[i]->height(t - start_[i]);
+  // Levels are 0 until an iso8608 segment: nothing added (not even a 0).
+  if (!blends_[i] && (level_[i][0] != 0.0 || level_[i][1] != 0.0)) h += level_[i];
+  return h;
 }
 
 std::vector<double> CourseRoad::breakpoints(double t0, double t1) const {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -74,31 +75,77 @@ class SineRoad : public RoadInput {
   SineSettings s_;
 };
 
+// ISO 8608 roughness: displacement PSD Gd(n) = Gd(n0) (n / n0)^-2, n0 = 0.1
+// cycles/m, Gd(n0) the class's geometric mean (A 16, B 64, C 256, D 1024,
+// E 4096, in 1e-6 m^3). A sum of `bands` sinusoids over [n_min, n_max]
+// cycles/m (log-spaced bands of width dn, amplitude sqrt(2 Gd(n) dn), seeded
+// random phases): smooth, so no kinks. The right track is
+// correlation * left + sqrt(1 - correlation^2) * an independent track (0:
+// independent, the harder case for roll; 1: the same). Faded in over the
+// first lead_in metres (a smooth step), so a vehicle at rest at s = 0 starts
+// on level ground. The profile itself: Iso8608Profile (road_profile.h).
+struct Iso8608Settings {
+  char road_class = 'B';  // A..E
+  std::uint64_t seed = 1;
+  double correlation = 0.0;
+  double n_min = 0.02, n_max = 5.0;  // cycles/m: wavelengths 50 m .. 0.2 m
+  int bands = 200;
+  double lead_in = 2.0;  // m
+};
+
 // One piece of a course road; durations in s.
 struct CourseSegment {
-  enum class Type { kSpeedBump, kSine, kRest };
+  enum class Type { kSpeedBump, kSine, kRest, kIso8608 };
   Type type = Type::kRest;
   SpeedBumpSettings speed_bump;
   SineSettings sine;
-  double duration = 0.0;  // sine and rest; a speed bump lasts until both tyres are past it
+  Iso8608Settings iso8608;  // iso8608 segment: its profile
+  double speed_kmh = 36.0;  // iso8608 segment: driving speed
+  double duration = 0.0;  // sine, rest and iso8608; a speed bump lasts until both tyres are past it
 };
 
 // Segments played one after another, each in its own time from 0 (a sine
-// starts at phase 0); flat road after the last one. Segment boundaries are
-// breakpoints, so a step where a sine ends is integrated exactly.
+// starts at phase 0, an ISO 8608 segment at distance 0 of its profile).
+// Segment boundaries are breakpoints, so a step where a sine ends is
+// integrated exactly.
+//
+// Levels: each segment starts from a level (heights of both tracks; 0 for the
+// first) and leaves one for the next:
+//  - rest holds its level: the vehicle stands still, the road under it does
+//    not move;
+//  - speed_bump and sine are their shapes on top of their level and leave it
+//    as they found it (a bump ends at 0; a sine ending off zero steps back to
+//    its level, a breakpoint);
+//  - iso8608 is driven at its speed_kmh: its profile P (Iso8608Profile at
+//    distance s = V tau) blended from its level L with the profile's own
+//    lead-in weight w(s) (0 at s = 0, 1 from lead_in on, C1):
+//    h = P(s) + (1 - w(s)) L, which starts at L and is the standalone
+//    profile itself from lead_in on; it leaves the heights it ended at.
+//    A stop after it therefore holds the heights where the vehicle stopped
+//    (speed changes are instantaneous: a kink at the boundary).
+// After the last segment the road stays at the level the last one left.
+// Levels are 0 until an iso8608 segment has been driven: a course of speed
+// bumps, sines and rests is flat road at exactly 0 between and after them,
+// its bumps and sines the standalone roads' heights bit for bit.
 class CourseRoad : public RoadInput {
  public:
-  // Throws std::invalid_argument for no segments, a bad bump or a duration <= 0.
+  // Throws std::invalid_argument for no segments, a bad bump, a duration <= 0,
+  // or an iso8608 segment with a speed <= 0, a bad profile or no lead-in (a
+  // lead_in of 0 would step from its level onto the profile).
   explicit CourseRoad(std::vector<CourseSegment> segments);
   Eigen::Vector2d height(double t) const override;
   std::vector<double> breakpoints(double t0, double t1) const override;
   // Start time of each segment and the course's end.
   const std::vector<double>& boundaries() const { return start_; }
+  // The level each segment starts from, then the one after the course.
+  const std::vector<Eigen::Vector2d>& levels() const { return level_; }
   // Time for both tyres to be past the bump (its last corner).
   static double speedBumpDuration(const SpeedBumpSettings& s);
  private:
   std::vector<std::unique_ptr<RoadInput>> roads_;  // null for rest
+  std::vector<bool> blends_;   // iso8608: the road blends from its level itself
   std::vector<double> start_;  // one per segment, then the course's end
+  std::vector<Eigen::Vector2d> level_;  // one per segment, then the one after the course
 };
 
 // A sampled series under any number of contacts, linearly

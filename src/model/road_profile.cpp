@@ -14,15 +14,14 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-// 0 before 0, 1 after `length`, a C1 cubic step between.
-double fadeIn(double s, double length) {
+}  // namespace
+
+double iso8608LeadIn(double s, double length) {
   if (length <= 0.0 || s >= length) return s < 0.0 ? 0.0 : 1.0;
   if (s <= 0.0) return 0.0;
   const double x = s / length;
   return x * x * (3.0 - 2.0 * x);
 }
-
-}  // namespace
 
 double iso8608Roughness(char road_class) {
   if (road_class < 'A' || road_class > 'E') {
@@ -65,7 +64,7 @@ double Iso8608Profile::height(int track, double s) const {
   }
   const double c = s_.correlation;
   const double h = track == 0 ? own[0] : c * own[0] + std::sqrt(1.0 - c * c) * own[1];
-  return fadeIn(s, s_.lead_in) * h;
+  return iso8608LeadIn(s, s_.lead_in) * h;
 }
 
 MeasuredProfile::MeasuredProfile(std::vector<double> s, std::vector<double> left,

@@ -22,25 +22,14 @@ class TrackProfile {
   virtual std::vector<double> kinks(double s0, double s1) const = 0;
 };
 
-// ISO 8608 roughness: displacement PSD Gd(n) = Gd(n0) (n / n0)^-2, n0 = 0.1
-// cycles/m, Gd(n0) the class's geometric mean (A 16, B 64, C 256, D 1024,
-// E 4096, in 1e-6 m^3). A sum of `bands` sinusoids over [n_min, n_max]
-// cycles/m (log-spaced bands of width dn, amplitude sqrt(2 Gd(n) dn), seeded
-// random phases): smooth, so no kinks. The right track is
-// correlation * left + sqrt(1 - correlation^2) * an independent track (0:
-// independent, the harder case for roll; 1: the same). Faded in over the
-// first lead_in metres (a smooth step), so a vehicle at rest at s = 0 starts
-// on level ground.
-struct Iso8608Settings {
-  char road_class = 'B';  // A..E
-  std::uint64_t seed = 1;
-  double correlation = 0.0;
-  double n_min = 0.02, n_max = 5.0;  // cycles/m: wavelengths 50 m .. 0.2 m
-  int bands = 200;
-  double lead_in = 2.0;  // m
-};
+// ISO 8608 roughness (Iso8608Settings, road_input.h: the PSD, the sum of
+// sinusoids, the tracks' correlation and the lead-in).
 // Gd(n0) of a class, m^3; throws std::invalid_argument outside A..E.
 double iso8608Roughness(char road_class);
+
+// The lead-in weight of Iso8608Profile at distance s: 0 up to 0, 1 from
+// `lead_in` on, a C1 cubic step between (lead_in 0: a step at 0).
+double iso8608LeadIn(double s, double lead_in);
 
 class Iso8608Profile : public TrackProfile {
  public:

@@ -422,11 +422,21 @@ void writeBag(const std::string& path, const BagContents& c) {
     if (c.ground_truth) {
       bag.write(c.ground_truth_topic, c.ground_truth->header.stamp, *c.ground_truth);
     }
-    std::size_t g = 0;
+    // The per-sample ground truths: sample g's from the change in force (change).
+    std::size_t g = 0, change = 0;
+    const std::vector<ParameterEstimate>& changes = c.ground_truth_changes;
+    ParameterEstimate truth;
     const auto truthsUpTo = [&](const ros::Time& stamp) {
-      for (; g < c.ground_truth_series.size() && c.ground_truth_series[g].header.stamp <= stamp; ++g) {
-        const auto& m = c.ground_truth_series[g];
-        bag.write(c.ground_truth_topic, m.header.stamp, m);
+      for (; !changes.empty() && g < c.samples.size(); ++g) {
+        const double t = c.samples[g].time;
+        const ros::Time at = stampAt(c.origin, t);
+        if (at > stamp) break;
+        while (change + 1 < changes.size() && changes[change + 1].time <= t) ++change;
+        truth = changes[change];
+        truth.header.stamp = at;
+        truth.sample_index = static_cast<std::uint32_t>(g + 1);
+        truth.time = t;
+        bag.write(c.ground_truth_topic, at, truth);
       }
     };
     std::vector<double> row(c.contacts.size());

@@ -106,9 +106,14 @@ struct BagContents {
   std::string road_heights_topic = kRoadHeightsTopic;
   MeasurementSeries samples;
   std::optional<ParameterEstimate> ground_truth;  // written at its header stamp
-  // Further ground truths (a truth that changes), stamps not decreasing; each
-  // is written before the road and samples of later stamps.
-  std::vector<ParameterEstimate> ground_truth_series;
+  // A truth that changes (synthesize_bag with a truth.schedule): one further
+  // ground truth per sample, written at the sample's stamp before the road
+  // and samples of later stamps: the last of ground_truth_changes whose
+  // `time` is at or before the sample's time (times increasing, the first at
+  // or before every sample), with header stamp, sample_index (k + 1) and time
+  // the sample's. Held once per change, so a long record costs no memory per
+  // sample. Empty: no per-sample ground truth.
+  std::vector<ParameterEstimate> ground_truth_changes;
   SuspensionJoints joints;
   std::string road_topic = kRoadTopic;  // full topic names as written
   std::string joint_states_topic = kJointStatesTopic;

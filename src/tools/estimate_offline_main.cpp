@@ -59,6 +59,7 @@ int main(int argc, char** argv) {
     config = sensitivityAndPrune(config, record, args.has("--sensitivity"), &sensitivity, &pruned);
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
     OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    result.warnings.insert(result.warnings.begin(), record.warnings.begin(), record.warnings.end());
     if (args.has("--sensitivity")) result.sensitivity = sensitivity;
     result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;

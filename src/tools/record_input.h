@@ -6,6 +6,7 @@
 #include <iostream>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
@@ -18,6 +19,9 @@ namespace pc_ekf {
 struct RecordInput {
   std::shared_ptr<const MechanicalModel> model;
   MeasurementSeries series;
+  // About the record as read (also on stderr): road-free samples dropped
+  // before every input had been read.
+  std::vector<std::string> warnings;
 };
 
 // `bag` and `csv` are paths ("" when not given; at most one of them).
@@ -61,6 +65,11 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
     RoadFreeRecord split = roadFreeRecord(config, r.series);
     r.model = split.model;
     r.series = std::move(split.outputs);
+    if (!split.warning.empty()) {
+      const std::string& name = !bag.empty() ? bag : !csv.empty() ? csv : config.source;
+      std::cerr << "[road-free] " << name << ": " << split.warning << "\n";
+      r.warnings.push_back(split.warning);
+    }
   }
   return r;
 }

@@ -2,6 +2,7 @@
 // config's model at the nominal and the true parameters
 // (a quick look at the model without any estimator). The truth includes
 // truth.vehicle and truth.schedule (not the sensor or timing imperfections).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -64,7 +65,11 @@ int main(int argc, char** argv) {
                                        c.integration);
       // The channels the model gives as built (IMU ones with readings as states).
       const auto& specs = c.model_type->description().channels();
-      std::printf("  %6s", "t [s]");
+      // Times to 0.01 s, or finer when the samples are closer (200 Hz: 0.001).
+      const int decimals =
+          std::max(2, static_cast<int>(std::ceil(-std::log10(c.sampling.interval()) - 1e-9)));
+      const int width = 6 + decimals - 2;
+      std::printf("  %*s", width, "t [s]");
       for (std::size_t ch = 0; ch < specs.size(); ++ch) {
         if (!model->channelModelled(static_cast<int>(ch))) continue;
         const std::string head = specs[ch].name + " [" + specs[ch].unit + "]";
@@ -72,7 +77,7 @@ int main(int argc, char** argv) {
       }
       std::printf("\n");
       for (std::size_t k = 0; k < times.size(); ++k) {
-        std::printf("  %6.2f", times[k]);
+        std::printf("  %*.*f", width, decimals, times[k]);
         for (std::size_t ch = 0; ch < specs.size(); ++ch) {
           if (model->channelModelled(static_cast<int>(ch))) std::printf(" %13.6f", z[k](ch, 0));
         }

@@ -112,6 +112,57 @@ TEST(EstimateOfflineBag, SineBagDiffersFromTheCsvRunOnlyByRoadInterpolation) {
   }
 }
 
+// A road-free bag whose IMU starts after the suspension sensors (its first
+// joint_states come before the first imu/data, so they have no gyro_x):
+// estimate_offline --bag drops the samples before every road-free input has
+// been read, as estimator_node does, says how many (stderr and the JSON's
+// warnings) and estimates from the rest of the record. The truth drives a
+// course of ISO 8608 road, a stop and ISO road again.
+TEST(EstimateOfflineBag, RoadFreeBagWhoseImuStartsLateDropsTheSamplesBeforeIt) {
+  ScratchDir dir;
+  std::string yaml =
+      test::readText(std::string(PC_EKF_SOURCE_DIR) + "/test/ros/estimator_road_free.yaml");
+  const std::string road =
+      "    source: iso8608\n    speed_kmh: 36.0\n    iso8608: {class: B, seed: 3, correlation: 0.0}\n";
+  const auto at = yaml.find(road);
+  ASSERT_NE(at, std::string::npos);
+  yaml.replace(at, road.size(),
+               "    source: course\n"
+               "    course:\n"
+               "      - {type: iso8608, class: B, speed_kmh: 36.0, duration: 0.8}\n"
+               "      - {type: rest, duration: 0.4}\n"
+               "      - {type: iso8608, class: C, speed_kmh: 54.0, duration: 0.8}\n");
+  const std::string config = dir.file("late_imu.yaml"), bag = dir.file("late_imu.bag");
+  std::ofstream(config) << yaml;
+  // Samples every 5 ms from 5 ms; the IMU at 400 Hz from 11.2 ms: the samples
+  // at 5 and 10 ms have no IMU reading before them.
+  synthesize(dir, config, bag, "--imu-rate 400 --imu-offset 0.0112");
+  const auto r = test::run(dir, PC_EKF_EXE_ESTIMATE_OFFLINE,
+                           "--config " + quote(config) + " --bag " + quote(bag) + " --out " +
+                               quote(dir.file("out")));
+  ASSERT_EQ(r.status, 0) << r.err;
+  const std::string dropped = "2 sample(s) before every road-free input had been read dropped";
+  EXPECT_NE(r.err.find("[road-free] " + bag + ": " + dropped), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("'gyro_x' not read yet"), std::string::npos) << r.err;
+  const nlohmann::json j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j.at("samples").get<int>(), 398);
+  bool warned = false;
+  for (const auto& w : j.at("warnings")) warned |= w.get<std::string>().find(dropped) == 0;
+  EXPECT_TRUE(warned) << j.at("warnings").dump();
+  const auto p = test::parseParameters(r.out);
+  ASSERT_EQ(p.size(), 2u);
+  for (const auto& [name, e] : p) {
+    EXPECT_TRUE(std::isfinite(e.mean) && e.stddev > 0.0) << name;
+  }
+  // The rest of the record is kept: the first estimate is the third sample's (t = 15 ms).
+  std::ifstream samples(dir.file("out/samples.csv"));
+  std::string header, first;
+  ASSERT_TRUE(std::getline(samples, header) && std::getline(samples, first));
+  ASSERT_EQ(header.rfind("index,t,", 0), 0u) << header;
+  const std::string t = first.substr(first.find(',') + 1);
+  EXPECT_NEAR(std::stod(t.substr(0, t.find(','))), 0.015, 1e-9) << first;
+}
+
 TEST(EstimateOfflineBag, UnusableBagsExitWithStatusTwoNamingTheFile) {
   ScratchDir dir;
   const std::string config = test::config("speed_bump.yaml");

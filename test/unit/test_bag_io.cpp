@@ -138,7 +138,14 @@ TEST(BagRoundTrip, TruthScheduleGivesAGroundTruthPerSample) {
     EXPECT_NEAR(truths[k].mean[0], k >= 5 ? 263.26 : 223.26, 1e-9) << k;
     EXPECT_NEAR(truths[k].xi_mean[0], k >= 5 ? 0.6326 : 0.2326, 1e-12) << k;
     EXPECT_NEAR(truths[k].mean[1], 0.762 * (1 - 0.25 * 0.3875), 1e-12);
+    // The values only: the PC basis is in the first one.
+    EXPECT_EQ(truths[k].names, truths[0].names);
+    EXPECT_EQ(truths[k].method, "truth");
+    EXPECT_TRUE(truths[k].coefficients.empty());
+    EXPECT_EQ(truths[k].term_count, 0u);
   }
+  EXPECT_EQ(truths[0].term_count, 15u);  // order 4, two germs
+  EXPECT_EQ(truths[0].coefficients.size(), 30u);
   EXPECT_NEAR(readBag(bag).ground_truth->mean[0], 263.26, 1e-9);  // the last one
 }
 

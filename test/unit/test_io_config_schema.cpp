@@ -27,7 +27,8 @@ const char* kDefaults =
     "  - {name: added_mass_position, relative_range: 0.25}\n";
 
 // Every branch that reads keys of its own: tolerances (number and map), a
-// course of each segment type, a truth road, vehicle and schedule (xi and values).
+// course of each segment type (speed_bump, sine, rest, iso8608), a truth
+// road, vehicle and schedule (xi and values).
 const char* kBranches =
     "uncertain:\n"
     "  - {name: added_mass, nominal: 200.0, relative_range: 0.5}\n"
@@ -41,6 +42,7 @@ const char* kBranches =
     "    - {type: speed_bump}\n"
     "    - {type: sine, duration: 1.0}\n"
     "    - {type: rest, duration: 1.0}\n"
+    "    - {type: iso8608, duration: 1.0, speed_kmh: 54.0, class: C, seed: 7, correlation: 0.5}\n"
     "truth:\n"
     "  vehicle: {bar_mass: 590.0}\n"
     "  road: {source: sine}\n"
@@ -81,7 +83,11 @@ std::string tablePath(const std::string& read_path) {
     const std::size_t dot = p.find('.', 11);
     return "tolerances.<name>" + (dot == std::string::npos ? "" : p.substr(dot));
   }
-  if (after("road.course[i].") && p != "road.course[i].type" && p != "road.course[i].duration") {
+  // A course segment's own rows; the other keys are road.speed_bump's or road.sine's.
+  static const std::set<std::string> segment_rows = {
+      "road.course[i].type",  "road.course[i].duration", "road.course[i].speed_kmh",
+      "road.course[i].class", "road.course[i].seed",     "road.course[i].correlation"};
+  if (after("road.course[i].") && !segment_rows.count(p)) {
     return "road.course[i].<speed_bump or sine key>";
   }
   return p;

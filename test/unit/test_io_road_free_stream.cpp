@@ -105,6 +105,62 @@ TEST(RoadFreeStream, RefusesSamplesByName) {
   EXPECT_EQ(out.channels, (std::vector<int>{4, 5, 6}));
 }
 
+// An IMU that starts after the suspension sensors (a bag whose first
+// joint_states come before the first imu/data): the samples before every
+// input has been read are dropped, as estimator_node drops them, and counted;
+// the rest of the record is what it would be without them, bit for bit.
+TEST(RoadFreeStream, SamplesBeforeEveryInputHasBeenReadAreDroppedAsTheNodeDoes) {
+  EstimatorConfig c = imuConfig(40, 0.2);
+  c.measurement.travel_blend = 0.02;  // the blend's state must not see them either
+  const MeasurementSeries full = synthesizeFromConfig(c, *truthOnItsRoad(c), 5);
+  MeasurementSeries late = full;
+  for (int k = 0; k < 3; ++k) late[k] = onlyChannels(late[k], {0, 1, 2, 3});  // no IMU yet
+  late[3] = onlyChannels(late[3], {0, 1, 2, 3, 4, 5});  // accel only: gyro_x still missing
+  const RoadFreeRecord split = roadFreeRecord(c, late);
+  EXPECT_EQ(split.dropped, 4u);
+  EXPECT_NE(split.warning.find("4 sample(s)"), std::string::npos) << split.warning;
+  EXPECT_NE(split.warning.find("sample 1 (t = 0.005"), std::string::npos) << split.warning;
+  EXPECT_NE(split.warning.find("'gyro_x' not read yet"), std::string::npos) << split.warning;
+  EXPECT_NE(split.warning.find("from sample 5"), std::string::npos) << split.warning;
+  const RoadFreeRecord rest = roadFreeRecord(c, MeasurementSeries(full.begin() + 4, full.end()));
+  EXPECT_EQ(rest.dropped, 0u);
+  EXPECT_EQ(rest.warning, "");
+  ASSERT_EQ(split.outputs.size(), full.size() - 4);
+  // The node's way: every sample offered to a stream, the refused ones skipped.
+  RoadFreeStream node(c, RoadFreeStream::inputsFor(c));
+  std::size_t taken = 0;
+  for (const Measurement& m : late) {
+    Measurement out;
+    if (!node.add(m, &out).empty()) continue;
+    ASSERT_LT(taken, split.outputs.size());
+    EXPECT_EQ(out.values, split.outputs[taken].values) << taken;
+    EXPECT_EQ(out.extra_covariance, split.outputs[taken].extra_covariance) << taken;
+    ++taken;
+  }
+  EXPECT_EQ(taken, split.outputs.size());
+  for (std::size_t k = 0; k < split.outputs.size(); ++k) {
+    EXPECT_EQ(split.outputs[k].time, rest.outputs[k].time) << k;
+    EXPECT_EQ(split.outputs[k].channels, rest.outputs[k].channels) << k;
+    EXPECT_EQ(split.outputs[k].values, rest.outputs[k].values) << k;
+    EXPECT_EQ(split.outputs[k].extra_covariance, rest.outputs[k].extra_covariance) << k;
+  }
+  // A missing input later on is held at its last value, not dropped.
+  MeasurementSeries gap = full;
+  gap[10] = onlyChannels(gap[10], {0, 1, 2, 3, 4, 5});
+  EXPECT_EQ(roadFreeRecord(c, gap).dropped, 0u);
+  // A record in which no sample has every input is refused, by name.
+  MeasurementSeries never = full;
+  for (auto& m : never) m = onlyChannels(m, {1, 2, 3, 4, 5, 6});  // no u1
+  try {
+    roadFreeRecord(c, never);
+    FAIL() << "a record without u1 was taken";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("no sample has every road-free input"), std::string::npos)
+        << e.what();
+    EXPECT_NE(std::string(e.what()).find("'u1' not read yet"), std::string::npos) << e.what();
+  }
+}
+
 // measurement.travel_blend: a travel and a rate that agree come through
 // unchanged (no lag), and the travel's noise falls to what the stream
 // assumes for it (its inherited variances use that figure).
