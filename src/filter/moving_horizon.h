@@ -95,6 +95,11 @@ class MovingHorizon {
   // The roll angle's error: mean and std (rad); 0 when not carried.
   double rollAngleError() const { return angle_ ? mean_[last()] : 0.0; }
   double rollAngleErrorStd() const { return angle_ ? std::sqrt(cov_(last(), last())) : 0.0; }
+  // The clock offset (s): how much later the predicted channels (the IMU)
+  // are stamped than the inputs (the suspension) for one instant; NaN when
+  // not estimated (settings.clock_offset 0).
+  double clockOffset() const;
+  double clockOffsetStd() const;
 
  private:
   struct Recent {  // a sample and the state before it
@@ -120,9 +125,12 @@ class MovingHorizon {
               const Eigen::MatrixXd& cov, bool damp);
   // Predicted readings of m's channels at zeta and along each parameter
   // (whitened); false when a point is not admissible or not finite.
-  bool predict(const Measurement& m, const NoiseModel& noise, const Eigen::VectorXd& at,
-               Eigen::VectorXd* values, Eigen::VectorXd* z0, Eigen::MatrixXd* jacobian,
-               Eigen::VectorXd* variances);
+  // dt: the time since the sample before (the clock offset's slope).
+  bool predict(const Measurement& m, double dt, const NoiseModel& noise,
+               const Eigen::VectorXd& at, Eigen::VectorXd* values, Eigen::VectorXd* z0,
+               Eigen::MatrixXd* jacobian, Eigen::VectorXd* variances);
+  // Readings (model state rows) of parameter columns th at `time`.
+  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y);
   void endWindow(HorizonStep& s);
   // reopen() with the roll angle carried: the angle's error moved to the
   // new load's static tilt (false: not possible, nothing changed).
@@ -145,7 +153,8 @@ class MovingHorizon {
   bool angle_ = false;  // the roll angle's error is the last state
   int accel_y_ = -1, accel_z_ = -1, gyro_ = -1;
   double previous_time_ = 0.0;
-  int last() const { return parameters_; }
+  int last() const { return parameters_; }  // the angle's row
+  int offset_ = -1;  // the clock offset's row (units of settings_.clock_offset); -1: none
   void walk(Eigen::MatrixXd& cov, double dt) const;  // the last sample's (window re-runs)
   MovingHorizonSettings settings_;
   Eigen::VectorXd prior_mean_, prior_std_, lower_, upper_;

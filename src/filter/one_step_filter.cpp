@@ -438,12 +438,17 @@ StepResult OneStepFilter::step(const Measurement& m) {
   const bool above = r.health.nis_window_outside && r.health.nis_window_mean > r.health.window_upper;
   violations_ = above ? violations_ + 1 : 0;
   if (settings_.reopen.mode != ReopenMode::kOff && violations_ >= settings_.reopen.after) {
-    reopen();
-    health_.reset();
-    r.reopened = true;
-    r.load_reset = settings_.reopen.mode == ReopenMode::kLoad;
-    r.health.reopened = true;
-    if (r.load_reset) reloadFromChange(r);
+    if (settings_.reopen.mode != ReopenMode::kLoad) {
+      reopen();
+      r.reopened = true;
+    } else {
+      r.reopened = r.load_reset = reloadFromChange(r);
+      r.rejected = rejected_;
+    }
+    if (r.reopened) {
+      health_.reset();
+      r.health.reopened = true;
+    }
     violations_ = 0;
   }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
@@ -485,7 +490,7 @@ int OneStepFilter::changeSpan() const {
   return settings_.reopen.after + 2 * settings_.health.nis_window;
 }
 
-void OneStepFilter::reloadFromChange(StepResult& r) {
+bool OneStepFilter::reloadFromChange(StepResult& r) {
   // The samples since the change began describe the new load: the filter
   // goes back to its state before them (so the vehicle values keep only what
   // the old load's samples taught), the load starts from its prior, and those
@@ -501,6 +506,11 @@ void OneStepFilter::reloadFromChange(StepResult& r) {
   const auto gate = [this](int dof) {
     return settings_.innovation_gate > 0.0 ? gateBound(dof) : 0.0;
   };
+  // A change leaves every sample after it misfit, so its start lies at
+  // least about `after` samples back; a run of chance excursions of the
+  // windowed NIS does not (its CUSUM start is the last few samples): that
+  // is no load change, and nothing is reset.
+  if (back < std::max(2, settings_.reopen.after / 2)) return false;
   const MovingHorizon before(*horizon_);
   std::unique_ptr<MovingHorizon> best;
   std::vector<SampleVerdict> best_verdicts;
@@ -532,6 +542,7 @@ void OneStepFilter::reloadFromChange(StepResult& r) {
   } else {
     horizon_ = std::move(best);
     change_samples_ = static_cast<int>(best_verdicts.size());
+    rejected_ += static_cast<int>(best_verdicts.back().gated) - static_cast<int>(r.gated);
     r.gated = r.health.gated = best_verdicts.back().gated;
     r.health.damped = best_verdicts.back().damped;
     r.damping = best_last.damping;
@@ -543,6 +554,7 @@ void OneStepFilter::reloadFromChange(StepResult& r) {
   r.coefficients = x_.bottomRows(np);
   r.mean = pcMean(r.coefficients);
   r.stddev = pcStddev(r.coefficients);
+  return true;
 }
 
 void OneStepFilter::horizonUpdate(const Measurement& m, double dt, StepResult& r) {

@@ -115,8 +115,9 @@ class OneStepFilter {
   void horizonUpdate(const Measurement& m, double dt, StepResult& r);
   void reopen();
   // reopen.mode load: back to where the change began, the load afresh, the
-  // samples since then again (r: this sample's result, updated).
-  void reloadFromChange(StepResult& r);
+  // samples since then again (r: this sample's result, updated). False: the
+  // misfit is no load change (nothing done).
+  bool reloadFromChange(StepResult& r);
   int changeSpan() const;  // samples the horizon keeps for that
   double changeLevel(int dof);  // NIS level above which a sample counts as changed
   std::vector<double> change_level_;

@@ -102,6 +102,18 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
   const SampleTiming timing = drawSampleTiming(s.times, s.timing);
   const auto channels =
       simulateScheduled(model, truth_params, s.schedule, timing.instants, s.integration);
+  // The IMU's readings from instants imu_clock_offset earlier (a second run).
+  std::vector<Eigen::MatrixXd> imu;
+  std::vector<bool> is_imu(static_cast<std::size_t>(model.observationMatrix().rows()), false);
+  if (s.timing.imu_clock_offset != 0.0) {
+    const auto& names = model.channelNames();
+    for (std::size_t ch = 0; ch < names.size() && ch < is_imu.size(); ++ch) {
+      is_imu[ch] = names[ch].rfind("accel_", 0) == 0 || names[ch].rfind("gyro_", 0) == 0;
+    }
+    std::vector<double> earlier = timing.instants;
+    for (double& t : earlier) t = std::max(0.0, t - s.timing.imu_clock_offset);
+    imu = simulateScheduled(model, truth_params, s.schedule, earlier, s.integration);
+  }
   std::mt19937_64 rng(s.seed);
   std::normal_distribution<double> normal;
   MeasurementSeries out;
@@ -115,7 +127,7 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
     Measurement exact = m;
     for (std::size_t c = 0; c < s.channels.size(); ++c) {
       const int ch = s.channels[c];
-      const double z = channels[k](ch, 0);
+      const double z = is_imu[static_cast<std::size_t>(ch)] ? imu[k](ch, 0) : channels[k](ch, 0);
       const double floor = channelValue(s.sensor.noise_floor, ch, s.noise_floor);
       const double relative = channelValue(s.channel_noise_relative, ch, s.noise_relative);
       const double sd = std::hypot(relative * z, floor);

@@ -34,6 +34,9 @@ struct TimingImperfections {
   double jitter = 0.0;         // std (s) of the true instant around t_k
   double stamp_error = 0.0;    // std (s) of the stamp around the true instant
   double drop_fraction = 0.0;  // probability that a sample is lost
+  // s: the IMU channels (accel_*, gyro_*) are read this long before their
+  // stamp (a clock offset between the IMU and the suspension sensors).
+  double imu_clock_offset = 0.0;
   std::uint64_t seed = 1;
   bool active() const { return jitter > 0.0 || stamp_error > 0.0 || drop_fraction > 0.0; }
 };

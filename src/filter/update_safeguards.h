@@ -72,6 +72,9 @@ struct MovingHorizonSettings {
   double shift = 0.5;   // re-run when a linearisation point is further, in posterior std
   int reruns = 3;       // per window
   double step = 1e-4;   // finite-difference step, in prior std
+  // s: prior std of a constant offset between the stamps of the predicted
+  // channels (the IMU) and of the inputs (the suspension); 0 = not estimated.
+  double clock_offset = 0.0;
 };
 
 struct SafeguardSettings {

@@ -263,6 +263,7 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   w.number("shift", s.horizon.shift, 0.0, kInf, true);
   w.integer("reruns", s.horizon.reruns, 0, 100);
   w.number("step", s.horizon.step, 0.0, 0.1, true);
+  w.number("clock_offset", s.horizon.clock_offset, 0.0, 1.0);
   w.finish();
   s.horizon.window = linearization == "mean" ? window : 0.0;
   if (s.reopen.mode == ReopenMode::kLoad && linearization != "mean") {
@@ -577,6 +578,7 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
     g.fail("drop_fraction", "1", "a probability in [0, 1)");
   }
   g.unsignedInteger("seed", c.truth.timing.seed);
+  g.number("imu_clock_offset", c.truth.timing.imu_clock_offset, -1.0, 1.0);
   g.finish();
 
   std::string load_change = "jump";
