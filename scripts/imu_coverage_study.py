@@ -17,6 +17,9 @@ LOADS = [(150.0, 0.62), (280.0, 0.90)]
 def config_text(zero, imu, samples, mass, position):
     text = open(os.path.join(ROOT, "config", "vehicle_imu.yaml")).read()
     text = text.replace("  source: none ", "  source: speed_bump #", 1)  # the road as told
+    # A told road gives the model dynamic states: the collocation filter.
+    text = text.replace("  linearization: mean ", "  linearization: collocation #", 1)
+    text = text.replace("reopen: {mode: load", "reopen: {mode: \"off\"", 1)
     start = text.index("  road:                         # the road the simulated")
     text = text[:start] + text[text.index("  sensor:", start):]  # the truth on that road too
     text = text.replace("  samples: 2000 ", "  samples: %d #" % samples, 1)

@@ -106,6 +106,8 @@ def config_text(road, duration, zero, vehicle, mass, position, seed):
     """vehicle_imu.yaml with a truth: road is the road: section's text."""
     text = open(os.path.join(ROOT, "config", "vehicle_imu.yaml")).read()
     text = text.replace("  zero: tare ", "  zero: %s #" % zero, 1)
+    if zero == "rest":  # the load's re-open needs tare (the rest zero is the start's load)
+        text = text.replace("reopen: {mode: load", "reopen: {mode: \"off\"", 1)
     text = text.replace("  samples: 2000 ", "  samples: %d #" % int(200 * duration), 1)
     text = text.replace("  duration: 10.0\n", "  duration: %.1f\n" % duration, 1)
     start = text.index("  road:                         # the road the simulated")

@@ -26,6 +26,10 @@ EstimatorConfig imuConfig(int samples, double duration) {
   root["sampling"]["samples"] = samples;
   root["sampling"]["duration"] = duration;
   root["measurement"]["travel_blend"] = 0.0;  // the raw travel: the formulation alone
+  // The collocation filter: its inherited covariance carries the angle's
+  // walk and its re-linearisation defers re-runs (what these tests read).
+  root["filter"]["linearization"] = "collocation";
+  root["filter"]["reopen"]["mode"] = "off";
   return parseConfig(root, "vehicle_imu.yaml");
 }
 

@@ -42,12 +42,17 @@ YAML::Node loadGerms(const YAML::Node& uncertain, const std::vector<double>& val
   return xi;
 }
 
-// config/vehicle_imu.yaml as shipped; the truth drives `road` with `load`,
+// config/vehicle_imu.yaml as shipped (with zero: rest as its comment says);
+// the truth drives `road` with `load`,
 // `zero` and, when given, vehicle values that differ from the config's.
 EstimatorConfig rollPlane(const std::string& road, double duration, const std::string& zero,
                           const Load& load, const std::string& vehicle) {
   YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
   root["measurement"]["zero"] = zero;
+  if (zero == "rest") {  // as the config says for rest: the collocation filter, no load re-open
+    root["filter"]["linearization"] = "collocation";
+    root["filter"]["reopen"]["mode"] = "off";
+  }
   root["sampling"]["samples"] = static_cast<int>(200 * duration);
   root["sampling"]["duration"] = duration;
   root["truth"]["road"] = YAML::Load(road);
