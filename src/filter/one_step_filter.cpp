@@ -226,6 +226,8 @@ void OneStepFilter::reset() {
   samples_ = 0;
   rejected_ = 0;
   violations_ = 0;
+  load_changes_ = 0;
+  load_change_time_ = std::numeric_limits<double>::quiet_NaN();
   health_.reset();
   rates_.reset(0.0);
   working_theta_.resize(0, 0);
@@ -451,6 +453,12 @@ StepResult OneStepFilter::step(const Measurement& m) {
     }
     violations_ = 0;
   }
+  r.load_changes = load_changes_;
+  r.load_change_time = load_change_time_;
+  if (horizon_) {
+    r.clock_offset = horizon_->clockOffset();
+    r.clock_offset_std = horizon_->clockOffsetStd();
+  }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
   // The rule's chance re-opens at this sample's dof: a correct model at a
   // high sampling rate re-opens now and then, and that is no misfit.
@@ -516,6 +524,7 @@ bool OneStepFilter::reloadFromChange(StepResult& r) {
   std::vector<SampleVerdict> best_verdicts;
   HorizonStep best_last;
   int best_gated = std::numeric_limits<int>::max();
+  double best_start = t_;
   for (int shift = 0; shift <= kChangeShifts && shift < back; ++shift) {
     auto trial = std::make_unique<MovingHorizon>(before);
     const std::vector<Measurement> again = trial->rewind(back - shift);
@@ -530,6 +539,7 @@ bool OneStepFilter::reloadFromChange(StepResult& r) {
       gated += h.gated;
     }
     if (gated < best_gated) {
+      best_start = again.empty() ? t_ : again.front().time;
       best = std::move(trial);
       best_verdicts = std::move(verdicts);
       best_last = h;
@@ -542,6 +552,8 @@ bool OneStepFilter::reloadFromChange(StepResult& r) {
   } else {
     horizon_ = std::move(best);
     change_samples_ = static_cast<int>(best_verdicts.size());
+    load_change_time_ = best_start;
+    ++load_changes_;
     rejected_ += static_cast<int>(best_verdicts.back().gated) - static_cast<int>(r.gated);
     r.gated = r.health.gated = best_verdicts.back().gated;
     r.health.damped = best_verdicts.back().damped;

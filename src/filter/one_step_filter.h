@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <vector>
 
@@ -40,6 +41,11 @@ struct StepResult {
   double damping = 1.0;   // fraction of the update applied (support rule)
   bool reopened = false;  // uncertainty re-opened after this sample
   bool load_reset = false;  // reopen.mode load: the load's estimate started afresh
+  int load_changes = 0;     // load resets since the prior
+  double load_change_time = std::numeric_limits<double>::quiet_NaN();  // the last one's first sample
+  // linearization mean with filter.horizon.clock_offset: the offset (s), its std; NaN: none.
+  double clock_offset = std::numeric_limits<double>::quiet_NaN();
+  double clock_offset_std = std::numeric_limits<double>::quiet_NaN();
   int rejected = 0;       // samples gated or rolled back since the prior
   bool relinearized = false;  // the samples so far were re-run from a working prior
   int restarts = 0;           // re-linearisations since the prior
@@ -122,6 +128,8 @@ class OneStepFilter {
   double changeLevel(int dof);  // NIS level above which a sample counts as changed
   std::vector<double> change_level_;
   int change_samples_ = 0;  // samples re-assimilated at the last load change
+  int load_changes_ = 0;
+  double load_change_time_ = std::numeric_limits<double>::quiet_NaN();
   // Re-runs the kept samples from a working prior around r; r when impossible.
   StepResult relinearize(const StepResult& r, const Eigen::ArrayXi& narrowed);
   // The working prior's parameter coefficients around r (false: none).

@@ -6,6 +6,7 @@
 #include <diagnostic_updater/diagnostic_updater.h>
 
 #include <cstdint>
+#include <limits>
 #include <map>
 #include <string>
 
@@ -52,6 +53,13 @@ struct LastUpdate {
   bool healthy = true;
   bool non_finite = false;
   std::vector<std::string> warnings;
+  // Load changes (filter.reopen.mode load) and the clock offset (NaN: none).
+  std::uint32_t load_changes = 0;
+  double load_change_time = std::numeric_limits<double>::quiet_NaN();
+  double load_found_at = std::numeric_limits<double>::quiet_NaN();  // the sample that found it
+  std::vector<std::string> load_summary;  // "name: mean +- std" after it
+  double clock_offset = std::numeric_limits<double>::quiet_NaN();
+  double clock_offset_std = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The node's own upkeep (not stored in checkpoints): background checkpoint
@@ -112,6 +120,9 @@ class EstimatorDiagnostics {
   void reportUpkeep(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportSensitivity(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportImu(diagnostic_updater::DiagnosticStatusWrapper& s);  // estimator_diagnostics_imu.cpp
+  // Load changes and the clock offset (estimator_diagnostics_load.cpp).
+  void reportLoad(diagnostic_updater::DiagnosticStatusWrapper& s);
+  std::uint32_t reported_load_changes_ = 0;
 
   diagnostic_updater::Updater updater_;
   EstimatorConfig config_;

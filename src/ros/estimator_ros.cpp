@@ -559,6 +559,25 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   last.healthy = e.estimate.healthy;
   last.non_finite = e.non_finite;
   last.warnings = e.estimate.warnings;
+  last.load_changes = e.estimate.load_changes;
+  last.load_change_time = e.estimate.load_change_time;
+  last.clock_offset = e.estimate.clock_offset;
+  last.clock_offset_std = e.estimate.clock_offset_stddev;
+  if (e.estimate.load_changed) {
+    last.load_found_at = sample.measurement.time;
+    last.load_summary.clear();
+    std::string said;
+    for (std::size_t i = 0; i < e.estimate.names.size(); ++i) {
+      if (e.estimate.names[i].rfind("added_mass", 0) != 0) continue;
+      char line[160];
+      std::snprintf(line, sizeof line, "%s %.4g +- %.2g", e.estimate.names[i].c_str(),
+                    e.estimate.mean[i], e.estimate.stddev[i]);
+      last.load_summary.push_back(line);
+      said += (said.empty() ? "" : ", ") + std::string(line);
+    }
+    ROS_INFO("%s: load change found at t = %.3f s (it began at t = %.3f s); the load afresh: %s",
+             name_.c_str(), sample.measurement.time, e.estimate.load_change_time, said.c_str());
+  }
 }
 
 bool EstimatorRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {

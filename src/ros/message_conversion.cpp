@@ -393,6 +393,11 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
   msg.rejected_samples = static_cast<std::uint32_t>(std::max(0, result.rejected));
   msg.damping = result.damping;
   msg.reopened = result.reopened;
+  msg.load_changed = result.load_reset;
+  msg.load_changes = static_cast<std::uint32_t>(std::max(0, result.load_changes));
+  msg.load_change_time = result.load_change_time;
+  msg.clock_offset = result.clock_offset;
+  msg.clock_offset_stddev = result.clock_offset_std;
   if (result.relinearized) {  // docs/method.md §4.9; not a health problem
     msg.warnings.push_back("re-linearised (" + std::to_string(result.restarts) +
                            "): the samples so far re-run from a working prior around the estimate");
@@ -427,6 +432,8 @@ ParameterEstimate groundTruthMessage(const ParameterMapping& mapping,
   msg.sample_index = 0;
   msg.time = 0.0;
   msg.method = "truth";
+  msg.load_change_time = msg.clock_offset = msg.clock_offset_stddev =
+      std::numeric_limits<double>::quiet_NaN();
   const Eigen::VectorXd values = mapping.valuesAtGerms(xi_truth.transpose()).col(0);
   setParameters(msg, mapping, values, Eigen::VectorXd::Zero(n));
   msg.xi_mean = toStd(xi_truth);  // exact, not through the inverse map
