@@ -21,6 +21,7 @@
 
 #include <Eigen/Dense>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -71,6 +72,10 @@ class MovingHorizon {
   // Random walk: variance intensity_i^2 dt added to parameter i.
   void drift(const Eigen::VectorXd& intensity, double dt);
   long evaluations() const { return evaluations_; }
+  // The first sample time a window re-run may read (infinity: none kept).
+  double windowStart() const {
+    return kept_.empty() ? std::numeric_limits<double>::infinity() : kept_.front().m.time;
+  }
   // True for channels whose roll angle integrates the gyro: accel_y,
   // accel_z and gyro_x, and no pitch (the roll plane).
   static bool carriesRollAngle(const std::vector<std::string>& channels);

@@ -44,6 +44,14 @@ class RoadFreeStream {
   // (Measurement::extra_covariance). Returns "" or why the sample was refused (an input not
   // read yet, a time not after the last); then nothing changes.
   std::string add(const Measurement& m, Measurement* out);
+  // The inputs no estimator needs any more forgotten (ReadingInputs::forget):
+  // `needed_from` the estimators' oldest time (EstimatorRun::oldestTime,
+  // OneStepFilter::roadNeededFrom), `kept_until` the last sample a batch
+  // over the record's first samples reads (-infinity: none). A stream that
+  // runs for hours then holds a bounded tail, not the record.
+  void forgetInputs(double needed_from, double kept_until) {
+    inputs_->forget(needed_from, kept_until);
+  }
 
  private:
   // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +
