@@ -2,6 +2,7 @@
 // master needed. One JSON object on stdout; logs on stderr; exit 2 on bad input.
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
 
 #include "pc_ekf/io/config_identity.h"
@@ -58,11 +59,15 @@ int main(int argc, char** argv) {
     std::vector<std::string> pruned;
     config = sensitivityAndPrune(config, record, args.has("--sensitivity"), &sensitivity, &pruned);
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
-    OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    // --out: the rows are written as the run makes them (none is kept).
+    std::unique_ptr<OfflineOutputs> out;
+    if (args.has("--out")) out = std::make_unique<OfflineOutputs>(args["--out"]);
+    OfflineResult result =
+        runOfflineEstimation(config, series, model, method, seed, progress, nullptr, out.get());
     if (args.has("--sensitivity")) result.sensitivity = sensitivity;
     result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;
-    if (args.has("--out")) writeOfflineOutputs(result, args["--out"]);
+    if (out) out->finish(result);
     return 0;
   });
 }
