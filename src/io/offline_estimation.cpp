@@ -1,7 +1,9 @@
 #include "pc_ekf/io/offline_estimation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <future>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -208,6 +210,45 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
     }
   }
   return o;
+}
+
+OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const MeasurementSeries& readings,
+                                 SampleSink* samples) {
+  if (readings.empty()) throw std::invalid_argument(c.source + ": no samples to estimate from");
+  checkRoadFreeRecord(c, readings);  // a refused sample fails now, not hours in
+  const auto start = std::chrono::steady_clock::now();
+  OfflineResult r;
+  r.method = toString(EstimationMethod::kOneStep);
+  r.update = toString(c.update);
+  r.samples = static_cast<int>(readings.size());
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &readings));
+  OneStepRun run(c, stream.model(), samples, &r);
+  // The coherence filter in step with the stream: the inputs it reads are
+  // appended, and forgotten once neither filter needs them.
+  const std::size_t k = static_cast<std::size_t>(c.health.coherence_decimation);
+  std::optional<OneStepFilter> coarse;
+  if (coherenceRuns(c, readings.size())) {
+    coarse.emplace(run.propagator().withThreads(1), coherenceSettings(run.settings()));
+  }
+  std::optional<StepResult> decimated;
+  Measurement outputs;
+  for (std::size_t i = 0; i < readings.size(); ++i) {
+    const std::string problem = stream.add(readings[i], &outputs);
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, i, readings[i], problem));
+    run.process(outputs);
+    if (coarse && (i + 1) % k == 0) decimated = coarse->process(outputs);
+    const double needed = run.filter().roadNeededFrom();
+    stream.forgetInputs(coarse ? std::min(needed, coarse->roadNeededFrom()) : needed,
+                        -std::numeric_limits<double>::infinity());
+  }
+  run.finish(readings.size(), decimated);
+  const std::string caveat = roadFreeCaveat(c);
+  if (!caveat.empty()) {
+    r.healthy = false;
+    r.warnings.push_back(caveat);
+  }
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
 }
 
 OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,

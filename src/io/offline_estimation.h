@@ -54,6 +54,15 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& config, const Measurem
                                    const CoarseGridCache* grid_cache = nullptr,
                                    SampleSink* samples = nullptr);
 
+// Road-free one-step (road.source none) on the raw readings: each sample is
+// split into the model's inputs and outputs (RoadFreeStream) just before
+// the filter takes it, as estimator_node does, and the inputs no filter
+// reads again are forgotten: memory beyond the readings does not grow with
+// the record. The same numbers as runOfflineEstimation on roadFreeRecord()'s
+// split. Throws ConfigError for a sample the stream refuses (before the run).
+OfflineResult runRoadFreeOneStep(const EstimatorConfig& config, const MeasurementSeries& readings,
+                                 SampleSink* samples = nullptr);
+
 std::string toJson(const OfflineResult& r);
 
 class SamplesCsv;

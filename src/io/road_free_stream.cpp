@@ -142,6 +142,12 @@ void RoadFreeStream::updateInputNoise() {
   inherited_at_ = model_->inputNoiseBySample(absolute_, relative_, mean_accel_z);
 }
 
+std::string roadFreeRefusal(const EstimatorConfig& c, std::size_t k, const Measurement& m,
+                            const std::string& problem) {
+  return c.source + ": road.source none: sample " + std::to_string(k + 1) + " (t = " +
+         std::to_string(m.time) + " s): " + problem;
+}
+
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
   RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record));
   RoadFreeRecord r;
@@ -149,14 +155,36 @@ RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries&
   for (std::size_t k = 0; k < record.size(); ++k) {
     Measurement out;
     const std::string problem = stream.add(record[k], &out);
-    if (!problem.empty()) {
-      throw ConfigError(c.source + ": road.source none: sample " + std::to_string(k + 1) +
-                        " (t = " + std::to_string(record[k].time) + " s): " + problem);
-    }
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, k, record[k], problem));
     r.outputs.push_back(std::move(out));
   }
   r.model = stream.model();
   return r;
+}
+
+void checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
+  // The stream refuses what its inputs refuse (the travel blend keeps a
+  // reading finite): the raw inputs through inputs of their own, forgotten
+  // as they go.
+  const std::vector<std::string> names = RoadFreeStream::inputsFor(c, &record);
+  std::vector<int> channels;
+  for (const std::string& name : names) {
+    channels.push_back(c.model_type->description().channelIndex(name));
+  }
+  ReadingInputs inputs(names);
+  std::vector<double> in(names.size());
+  for (std::size_t k = 0; k < record.size(); ++k) {
+    const Measurement& m = record[k];
+    std::fill(in.begin(), in.end(), std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t j = 0; j < m.channels.size(); ++j) {
+      const auto it = std::find(channels.begin(), channels.end(), m.channels[j]);
+      if (it == channels.end()) continue;
+      in[static_cast<std::size_t>(it - channels.begin())] = m.values[static_cast<Eigen::Index>(j)];
+    }
+    const std::string problem = inputs.append(m.time, in.data());
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, k, m, problem));
+    inputs.forget(m.time, -std::numeric_limits<double>::infinity());
+  }
 }
 
 std::string roadFreeCaveat(const EstimatorConfig& c) {

@@ -88,6 +88,12 @@ struct RoadFreeRecord {
   MeasurementSeries outputs;
 };
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+// Throws the ConfigError roadFreeRecord would for the first sample a stream
+// would refuse, without splitting anything (cheap; memory does not grow).
+void checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+// That error's text for sample k (0-based) and the stream's reason.
+std::string roadFreeRefusal(const EstimatorConfig& c, std::size_t k, const Measurement& m,
+                            const std::string& problem);
 
 // Why a road-free estimate of this config is not to be trusted, or empty.
 // The full car's with accel_y is not: on its own synthetic drives the load's

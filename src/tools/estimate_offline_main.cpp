@@ -50,9 +50,16 @@ int main(int argc, char** argv) {
     std::uint64_t seed = config.truth.seed;
     int status = 0;
     if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
+    // Road-free one-step splits the readings as the filter goes (memory:
+    // the readings); the other methods, the sensitivity and
+    // tolerances_prune need the whole split first.
+    const bool stream_road_free = config.road.source == RoadSource::kNone &&
+                                  method == EstimationMethod::kOneStep &&
+                                  !args.has("--sensitivity") && !(config.tolerances_prune > 0.0);
     const RecordInput record =
         loadRecord(config, args.has("--bag") ? args["--bag"] : "",
-                   args.has("--measurements") ? args["--measurements"] : "", seed);
+                   args.has("--measurements") ? args["--measurements"] : "", seed,
+                   !stream_road_free);
     const auto& model = record.model;
     const MeasurementSeries& series = record.series;
     PriorSensitivity sensitivity;
@@ -63,7 +70,9 @@ int main(int argc, char** argv) {
     std::unique_ptr<OfflineOutputs> out;
     if (args.has("--out")) out = std::make_unique<OfflineOutputs>(args["--out"]);
     OfflineResult result =
-        runOfflineEstimation(config, series, model, method, seed, progress, nullptr, out.get());
+        stream_road_free ? runRoadFreeOneStep(config, series, out.get())
+                         : runOfflineEstimation(config, series, model, method, seed, progress,
+                                                nullptr, out.get());
     if (args.has("--sensitivity")) result.sensitivity = sensitivity;
     result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;

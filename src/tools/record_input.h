@@ -16,15 +16,18 @@
 namespace pc_ekf {
 
 struct RecordInput {
-  std::shared_ptr<const MechanicalModel> model;
+  std::shared_ptr<const MechanicalModel> model;  // null: road-free readings not split
   MeasurementSeries series;
 };
 
 // `bag` and `csv` are paths ("" when not given; at most one of them).
 // With road.source none the model is the road-free one built from the
-// record (RoadFreeStream), the series its outputs.
+// record (RoadFreeStream), the series its outputs; with `split_road_free`
+// false the series stays the readings and the model null
+// (runRoadFreeOneStep splits them as it goes).
 inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& bag,
-                              const std::string& csv, std::uint64_t seed) {
+                              const std::string& csv, std::uint64_t seed,
+                              bool split_road_free = true) {
   RecordInput r;
   std::shared_ptr<const ContactRoad> bag_road;
   if (!bag.empty()) {
@@ -57,10 +60,12 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   if (!zero.empty()) {
     throw ConfigError((bag.empty() ? csv : bag) + ": " + zero);
   }
-  if (road_free) {
+  if (road_free && split_road_free) {
     RoadFreeRecord split = roadFreeRecord(config, r.series);
     r.model = split.model;
     r.series = std::move(split.outputs);
+  } else if (road_free) {
+    checkRoadFreeRecord(config, r.series);  // a sample the stream refuses: refused now
   }
   return r;
 }

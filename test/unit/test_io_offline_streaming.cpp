@@ -1,9 +1,12 @@
 // estimate_offline keeps nothing per sample: the records go to a sink as the
 // run makes them, once per sample and in order, with the numbers the run
 // reports; samples.csv is written from them row by row and reads back as
-// the same doubles.
+// the same doubles; road-free one-step splits the readings as the filter
+// goes (forgetting the inputs no filter reads again) and gives the numbers
+// of the whole record's split.
 #include <gtest/gtest.h>
 #include <unistd.h>
+#include <yaml-cpp/yaml.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -15,6 +18,7 @@
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
+#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/io/samples_csv.h"
 
 namespace pc_ekf {
@@ -225,6 +229,56 @@ TEST(OfflineStreaming, AFailedWriteIsAnError) {
     csv.close(collected.columns);
   };
   EXPECT_THROW(write(), std::runtime_error);
+}
+
+// Road-free one-step on the raw readings, split as the filter goes and the
+// inputs forgotten behind it, against the whole record split first: the
+// same records and JSON, linearised at the mean (its horizon's windows
+// re-read the inputs) and by collocation with re-linearisation (re-runs
+// from the start while it lasts).
+TEST(OfflineStreaming, RoadFreeStreamGivesTheWholeSplitsNumbers) {
+  struct Case {
+    const char* linearization;
+    double duration;
+  };
+  for (const Case& k : {Case{"mean", 60.0}, Case{"collocation", 25.0}}) {
+    SCOPED_TRACE(k.linearization);
+    YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+    root["sampling"]["samples"] = static_cast<int>(200 * k.duration);
+    root["sampling"]["duration"] = k.duration;
+    root["filter"]["linearization"] = k.linearization;
+    const EstimatorConfig c = parseConfig(root, "vehicle_imu.yaml");
+    const MeasurementSeries readings = synthesizeFromConfig(c, *truthOnItsRoad(c), c.truth.seed);
+    Collected streamed, whole;
+    const OfflineResult a = runRoadFreeOneStep(c, readings, &streamed);
+    const RoadFreeRecord split = roadFreeRecord(c, readings);
+    const OfflineResult b = runOfflineEstimation(c, split.outputs, split.model,
+                                                 EstimationMethod::kOneStep, c.truth.seed, {},
+                                                 nullptr, &whole);
+    EXPECT_EQ(withoutWallTime(toJson(a)), withoutWallTime(toJson(b)));
+    ASSERT_EQ(streamed.records.size(), readings.size());
+    ASSERT_EQ(whole.records.size(), readings.size());
+    EXPECT_EQ(streamed.columns.loo_channels, whole.columns.loo_channels);
+    for (std::size_t i = 0; i < readings.size(); ++i) {
+      ASSERT_TRUE(sameRecord(streamed.records[i], whole.records[i])) << "sample " << i + 1;
+    }
+  }
+}
+
+TEST(OfflineStreaming, ARefusedReadingFailsBeforeTheRun) {
+  EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+  c.sampling.samples = 200;
+  c.sampling.duration = 1.0;
+  MeasurementSeries readings = synthesizeFromConfig(c, *truthOnItsRoad(c), 1);
+  readings[150].time = readings[149].time;  // not after the sample before
+  Collected sink;
+  try {
+    runRoadFreeOneStep(c, readings, &sink);
+    ADD_FAILURE() << "no error";
+  } catch (const ConfigError& e) {
+    EXPECT_NE(std::string(e.what()).find("sample 151"), std::string::npos) << e.what();
+  }
+  EXPECT_TRUE(sink.records.empty());
 }
 
 }  // namespace
