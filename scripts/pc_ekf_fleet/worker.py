@@ -10,7 +10,13 @@ import shutil
 import signal
 import socket
 import subprocess
+import tempfile
 import time
+
+# What a worker keeps of estimate_offline's stderr (bytes, its end): the
+# last line names a failure, and a long record's progress lines (enkf: one
+# per 10 samples) are not held in memory.
+STDERR_TAIL = 64 * 1024
 
 
 def _worker_address():
@@ -34,6 +40,13 @@ def _bag_start_stamp(path):
 def last_line(text):
     lines = [l.strip() for l in text.splitlines() if l.strip()]
     return lines[-1] if lines else "(no output)"
+
+
+def file_tail(f, limit=STDERR_TAIL):
+    """The last `limit` bytes of the binary file f, as text."""
+    f.seek(0, os.SEEK_END)
+    f.seek(max(0, f.tell() - limit))
+    return f.read().decode("utf-8", "replace")
 
 
 def installed_estimate_offline():
@@ -61,29 +74,35 @@ def estimate_bag(task):
         exe = installed_estimate_offline() or exe
     cmd = [exe, "--config", task["config"], "--bag", task["path"], "--method", task["method"]]
     start = time.monotonic()
+    # stderr to a file, of which only the end is read (STDERR_TAIL); stdout
+    # is the one JSON object.
+    with tempfile.TemporaryFile() as err_file:
+        _run(cmd, exe, task["timeout"], err_file, result)
+    result["wall_time_s"] = time.monotonic() - start
+    return result
+
+
+def _run(cmd, exe, timeout, err_file, result):
     try:
         proc = subprocess.run(cmd, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, timeout=task["timeout"],
-                              universal_newlines=True)
+                              stderr=err_file, timeout=timeout, universal_newlines=True)
     except subprocess.TimeoutExpired:
-        result["error"] = (f"timeout: estimate_offline ran longer than {task['timeout']:g} s "
+        result["error"] = (f"timeout: estimate_offline ran longer than {timeout:g} s "
                            "(killed)")
     except OSError as err:
         result["error"] = f"cannot run estimate_offline ({exe}): {err.strerror}"
     else:
         if proc.returncode == 2:
-            result["error"] = f"bad input: {last_line(proc.stderr)}"
+            result["error"] = f"bad input: {last_line(file_tail(err_file))}"
         elif proc.returncode < 0:
             result["error"] = (f"estimate_offline killed by signal "
                                f"{signal.Signals(-proc.returncode).name}")
         elif proc.returncode != 0:
             result["error"] = (f"estimate_offline exited with status {proc.returncode}: "
-                               f"{last_line(proc.stderr)}")
+                               f"{last_line(file_tail(err_file))}")
         else:
             try:
                 result["estimate"] = json.loads(proc.stdout)
             except ValueError:
                 result["error"] = ("estimate_offline printed no JSON object: "
                                    f"{last_line(proc.stdout)}")
-    result["wall_time_s"] = time.monotonic() - start
-    return result

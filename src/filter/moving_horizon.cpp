@@ -479,6 +479,22 @@ bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eig
   return y.allFinite();
 }
 
+double MovingHorizon::windowStart() const {
+  double t = std::numeric_limits<double>::infinity();
+  double gap = 0.0;
+  if (!kept_.empty()) {
+    t = kept_.front().m.time;
+    gap = kept_.front().dt;
+  }
+  if (!recent_.empty() && recent_.front().m.time < t) {
+    t = recent_.front().m.time;
+    gap = t - recent_.front().previous_time;
+  }
+  // The clock offset's slope reads the predictions four samples before.
+  if (offset_ >= 0 && std::isfinite(t)) t -= 4.0 * std::max(gap, 0.0);
+  return t;
+}
+
 void MovingHorizon::keepRecent(int count) {
   recent_capacity_ = static_cast<std::size_t>(std::max(0, count));
   while (recent_.size() > recent_capacity_) recent_.pop_front();

@@ -23,6 +23,7 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -89,6 +90,10 @@ class MovingHorizon {
   void drift(const Eigen::VectorXd& intensity, double dt);
   long evaluations() const { return evaluations_; }
   double lastTime() const { return previous_time_; }  // the last sample's time
+  // The first sample time a re-run may read (infinity: none kept): the
+  // window's, a load change's rewind over the recent samples, and the clock
+  // offset's slope four samples before each.
+  double windowStart() const;
   // True for channels whose roll angle integrates the gyro: accel_y,
   // accel_z and gyro_x, and no pitch (the roll plane).
   static bool carriesRollAngle(const std::vector<std::string>& channels);

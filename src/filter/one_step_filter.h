@@ -4,6 +4,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <functional>
 #include <limits>
 #include <memory>
@@ -93,8 +94,12 @@ class OneStepFilter {
   // applies it to every result, a caller reporting state() itself calls it.
   void report(StepResult& r) const;
   int rejected() const { return rejected_; }
-  // Earliest time the filter may still need the road from (a re-run).
-  double roadNeededFrom() const { return relinearizing_ ? 0.0 : t_; }
+  // Earliest time the filter may still need the road (or a road-free
+  // model's inputs) from: a re-run, or the moving horizon's window.
+  double roadNeededFrom() const {
+    if (relinearizing_) return 0.0;
+    return horizon_ ? std::min(t_, horizon_->windowStart()) : t_;
+  }
   // Deferred re-runs: their propagator (default: a single-threaded copy of
   // this one, sharing the model and its road) and a call made on this thread
   // before the worker starts and before each sample it is fed (e.g. to hand

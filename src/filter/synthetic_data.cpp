@@ -116,8 +116,15 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
   }
   std::mt19937_64 rng(s.seed);
   std::normal_distribution<double> normal;
+  // Sized once: a long drive's series grown by doubling held up to twice itself.
+  const auto kept =
+      static_cast<std::size_t>(std::count(timing.kept.begin(), timing.kept.end(), true));
   MeasurementSeries out;
-  if (clean) clean->clear();
+  out.reserve(kept);
+  if (clean) {
+    clean->clear();
+    clean->reserve(kept);
+  }
   for (std::size_t k = 0; k < s.times.size(); ++k) {
     if (!timing.kept[k]) continue;
     Measurement m;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <functional>
 #include <iomanip>
 #include <limits>
 #include <sstream>
@@ -54,10 +55,12 @@ double parseCell(const std::string& raw, bool missing_ok, const std::string& sou
 
 // Reads header + rows of numbers; the first column is time, strictly increasing.
 // With `any_columns` the header is t and any distinct columns of `header`
-// (after its first), in any order, and `header` is replaced by the file's.
-std::vector<std::vector<double>> readTable(std::istream& in, const std::string& source,
-                                           std::vector<std::string>& header, bool missing_ok,
-                                           bool any_columns = false) {
+// (after its first), in any order, and `header` is replaced by the file's
+// before the first row. Each row goes to `take` as it is read: a long
+// record is not held a second time as a table.
+void readTable(std::istream& in, const std::string& source, std::vector<std::string>& header,
+               bool missing_ok, bool any_columns,
+               const std::function<void(const std::vector<double>&)>& take) {
   std::string line;
   int number = 0;
   std::string expected;
@@ -83,7 +86,9 @@ std::vector<std::vector<double>> readTable(std::istream& in, const std::string& 
     expected = trim(line);
   }
   if (got != header) fail(source, number, "header '" + trim(line) + "', expected '" + expected + "'");
-  std::vector<std::vector<double>> rows;
+  std::size_t rows = 0;
+  double previous = 0.0;
+  std::vector<double> row;
   while (std::getline(in, line)) {
     ++number;
     if (trim(line).empty()) continue;
@@ -92,19 +97,20 @@ std::vector<std::vector<double>> readTable(std::istream& in, const std::string& 
       fail(source, number, std::to_string(cells.size()) + " cells, expected " +
                                std::to_string(header.size()) + " (" + expected + ")");
     }
-    std::vector<double> row(cells.size());
+    row.assign(cells.size(), 0.0);
     row[0] = parseCell(cells[0], false, source, number, header[0]);
     for (std::size_t c = 1; c < cells.size(); ++c) {
       row[c] = parseCell(cells[c], missing_ok, source, number, header[c]);
     }
-    if (!rows.empty() && !(row[0] > rows.back()[0])) {
+    if (rows > 0 && !(row[0] > previous)) {
       fail(source, number, "time " + trim(cells[0]) + " is not after the previous row's");
     }
     if (row[0] < 0.0) fail(source, number, "time " + trim(cells[0]) + " is negative");
-    rows.push_back(row);
+    take(row);
+    previous = row[0];
+    ++rows;
   }
-  if (rows.empty()) fail(source, number, "no data rows after the header");
-  return rows;
+  if (rows == 0) fail(source, number, "no data rows after the header");
 }
 
 std::ifstream openOrThrow(const std::string& path) {
@@ -124,26 +130,31 @@ MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source
   MeasurementSeries series;
   std::vector<std::string> header{"t"};
   header.insert(header.end(), channels.begin(), channels.end());
-  const auto rows = readTable(in, source, header, true, true);
-  // The file's columns in the model's channel order.
+  // The file's columns in the model's channel order (the file's header is
+  // read before the first row).
   std::vector<std::pair<int, int>> order;  // (model channel, file column)
-  for (std::size_t col = 1; col < header.size(); ++col) {
-    const auto it = std::find(channels.begin(), channels.end(), header[col]);
-    order.emplace_back(static_cast<int>(it - channels.begin()), static_cast<int>(col));
-  }
-  std::sort(order.begin(), order.end());
-  for (const auto& row : rows) {
+  std::vector<double> values;
+  readTable(in, source, header, true, true, [&](const std::vector<double>& row) {
+    if (order.empty()) {
+      for (std::size_t col = 1; col < header.size(); ++col) {
+        const auto it = std::find(channels.begin(), channels.end(), header[col]);
+        order.emplace_back(static_cast<int>(it - channels.begin()), static_cast<int>(col));
+      }
+      std::sort(order.begin(), order.end());
+    }
     Measurement m;
     m.time = row[0];
-    std::vector<double> values;
+    m.channels.reserve(order.size());
+    values.clear();
     for (const auto& [c, col] : order) {
       if (std::isnan(row[static_cast<std::size_t>(col)])) continue;
       m.channels.push_back(c);
       values.push_back(row[static_cast<std::size_t>(col)]);
     }
-    m.values = Eigen::Map<Eigen::VectorXd>(values.data(), values.size());
-    series.push_back(m);
-  }
+    m.values = Eigen::Map<Eigen::VectorXd>(values.data(),
+                                           static_cast<Eigen::Index>(values.size()));
+    series.push_back(std::move(m));
+  });
   return series;
 }
 
@@ -188,10 +199,10 @@ ContactSeries readContactRoadCsv(std::istream& in, const std::string& source,
   header.insert(header.end(), columns.begin(), columns.end());
   ContactSeries road;
   road.heights.resize(columns.size());
-  for (const auto& row : readTable(in, source, header, false)) {
+  readTable(in, source, header, false, false, [&](const std::vector<double>& row) {
     road.t.push_back(row[0]);
     for (std::size_t c = 0; c < columns.size(); ++c) road.heights[c].push_back(row[c + 1]);
-  }
+  });
   return road;
 }
 

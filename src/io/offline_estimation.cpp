@@ -1,18 +1,19 @@
 #include "pc_ekf/io/offline_estimation.h"
 
+#include <algorithm>
 #include <chrono>
 #include <future>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
-#include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/reference_posterior.h"
-#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/io/estimation_setup.h"
-#include "pc_ekf/pc/in_parts.h"
-#include "pc_ekf/pc/pdf_sampler.h"
+#include "pc_ekf/io/offline_one_step.h"
+#include "pc_ekf/io/offline_parts.h"
+#include "pc_ekf/io/road_free_stream.h"
 
 namespace pc_ekf {
 
@@ -38,33 +39,7 @@ EstimationMethod estimationMethodFromString(const std::string& s) {
 
 namespace {
 
-// estimate_offline's one-step run assesses the support every this many samples.
-constexpr int kSupportEvery = 10;
-
-void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eigen::VectorXd& sd,
-               OfflineResult* r) {
-  r->parameters.clear();
-  for (std::size_t i = 0; i < c.uncertain.size(); ++i) {
-    const UncertainParameter& u = c.uncertain[i];
-    const double scale = u.nominal * u.relative_range;
-    r->parameters.push_back({u.name, mean[i], sd[i], (mean[i] - u.nominal) / scale, sd[i] / scale});
-  }
-}
-
-// The final PDFs (makePdfSampler: shared draws or seed + i per parameter).
-// The draws do not depend on the data, so the sampler is built on a second
-// thread while the filter runs (same numbers whatever the timing).
-using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
-PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis) {
-  return std::async(std::launch::async, [&c, basis = std::move(basis)] {
-    return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()), machineThreads());
-  });
-}
-std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {
-  const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
-  if (!coeffs.allFinite()) return {};
-  return s->histograms(coeffs, machineThreads());
-}
+using namespace offline;
 
 Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
   Histogram h;
@@ -84,103 +59,35 @@ Histogram sampleHistogram(const Eigen::VectorXd& v, int bins) {
   return h;
 }
 
-// The multi-rate coherence check's filter (docs/method.md §5.2): the same
-// filter on every k-th sample, on a thread of its own (it depends on nothing
-// the full-rate filter computes) with a one-thread copy of the propagator
-// (bitwise the same forecast). Empty when the record is too short.
-using CoherenceFuture = std::future<std::optional<StepResult>>;
-CoherenceFuture startCoherenceFilter(const EstimatorConfig& c, const MeasurementSeries& series,
-                                     const PcPropagator& prop, const OneStepSettings& settings) {
-  MeasurementSeries dec = decimate(series, c.health.coherence_decimation);
-  if (!(dec.size() >= 1 && series.size() >= 2 * dec.size())) {
+// Over a whole record the coherence filter runs on a thread of its own (it
+// depends on nothing the full-rate filter computes), reading every k-th
+// sample in place, with a one-thread copy of the propagator (bitwise the
+// same forecast). The series must outlive the future.
+std::future<std::optional<StepResult>> startCoherenceFilter(const EstimatorConfig& c,
+                                                            const MeasurementSeries& series,
+                                                            const PcPropagator& prop,
+                                                            const OneStepSettings& settings) {
+  if (!coherenceRuns(c, series.size())) {
     std::promise<std::optional<StepResult>> none;
     none.set_value(std::nullopt);
     return none.get_future();
   }
-  OneStepSettings coarse_settings = settings;  // it is asked for the mean and std only
-  coarse_settings.health.support_every = 0;
-  return std::async(std::launch::async, [dec = std::move(dec), prop = prop.withThreads(1),
-                                         coarse_settings] {
-    OneStepFilter coarse(prop, coarse_settings);
+  const std::size_t k = static_cast<std::size_t>(c.health.coherence_decimation);
+  return std::async(std::launch::async, [&series, k, prop = prop.withThreads(1),
+                                         s = coherenceSettings(settings)] {
+    OneStepFilter coarse(prop, s);
     StepResult d;
-    for (const Measurement& m : dec) d = coarse.process(m);
+    for (std::size_t i = k - 1; i < series.size(); i += k) d = coarse.process(series[i]);
     return std::optional<StepResult>(std::move(d));
   });
 }
 
 void runOneStep(const EstimatorConfig& c, const MeasurementSeries& series,
-                std::shared_ptr<const MechanicalModel> model, OfflineResult* r) {
-  // The PDF draws depend only on the basis: drawn while the propagator is built and the filter runs.
-  const PdfSamplerFuture pdf_sampler = startPdfSampler(
-      c, PolynomialBasis(ParameterMapping(*model, c.uncertain).germs(), c.pc_order, c.pc_truncation));
-  const std::shared_ptr<const PcPropagator> prop = makePropagator(c, model);
-  // The mass outside the support (a warning, docs/method.md §5.9) is
-  // assessed at every 10th sample for its rate, and at the last one; it is
-  // most of a sample's cost at n = 16. The coherence filter does without.
-  OneStepSettings settings = makeOneStepSettings(c);
-  settings.health.support_every = kSupportEvery;
-  CoherenceFuture coherence = startCoherenceFilter(c, series, *prop, settings);
-  OneStepFilter filter(prop, settings);
-  StepResult last;
-  int nested = 0, forecast_problems = 0;
-  bool nonfinite = false;
-  for (const Measurement& m : series) {
-    last = filter.process(m);
-    SampleRecord rec{last.index, last.time, last.mean, last.stddev, last.coefficients,
-                     last.health.nis, last.health.nis_window_outside, last.health.band_nested,
-                     last.health.healthy(), last.health.loo_error};
-    r->records.push_back(rec);
-    r->nis_window_violations += last.health.nis_window_outside;
-    nested += last.health.band_nested;
-    forecast_problems += last.forecast.invalid_points + last.forecast.nonfinite_points > 0;
-    nonfinite = nonfinite || last.health.forecast_failed;
-    r->damped_updates += last.damping < 1.0;
-    r->reopened += last.reopened;
-    const SafeguardRates& rates = last.health.rates;
-    r->rate_window_violations += rates.gated.window.flagged || rates.damped.window.flagged ||
-                                 rates.reopened.window.flagged || rates.support.window.flagged;
-  }
-  if (!series.empty() && last.health.mass_outside_support.size() == 0) filter.assessSupport(&last);
-  r->safeguard_rates = last.health.rates;
-  r->rejected_samples = filter.rejected();
-  r->relinearized = last.restarts;
-  // The leading channels the model gives as built (ForecastReport::loo_error).
-  for (std::size_t i = 0; i < model->channelNames().size() && model->channelModelled(static_cast<int>(i)); ++i) {
-    r->loo_channels.push_back(model->channelNames()[i]);
-  }
-  r->band_nested_fraction = series.empty() ? 1.0 : double(nested) / series.size();
-  summarise(c, last.mean, last.stddev, r);
-  r->pdfs = pcPdfs(pdf_sampler, last.coefficients);
-  r->integrations = prop->integrations() + filter.horizonEvaluations();
-  for (const auto& w : last.health.warnings()) r->warnings.push_back(w);
-  if (r->rejected_samples) {
-    r->warnings.push_back(std::to_string(r->rejected_samples) +
-                          " samples not used (innovation gate or non-finite update)");
-  }
-  if (r->damped_updates) {
-    r->warnings.push_back(std::to_string(r->damped_updates) +
-                          " updates damped to keep the parameter means in their prior support");
-  }
-  if (r->reopened) r->warnings.push_back("uncertainty re-opened " + std::to_string(r->reopened) + " times");
-  if (forecast_problems) {
-    r->warnings.push_back(std::to_string(forecast_problems) +
-                          " samples had collocation points outside the model's domain");
-  }
-  r->healthy = !nonfinite && last.health.healthy();
-
-  // Multi-rate coherence (docs/method.md §5.2): the same filter on every k-th sample.
-  r->coherence.decimation = c.health.coherence_decimation;
-  r->coherence.threshold = c.health.coherence_threshold;
-  if (const std::optional<StepResult> d = coherence.get()) {
-    r->coherence.available = true;
-    r->coherence.disagreement = coherenceDisagreement(last.mean, last.stddev, d->mean, d->stddev);
-    r->coherence.flagged =
-        !(r->coherence.disagreement.array() <= c.health.coherence_threshold).all();
-    if (r->coherence.flagged) {
-      r->warnings.push_back("multi-rate coherence check: full and decimated streams disagree");
-      r->healthy = false;
-    }
-  }
+                std::shared_ptr<const MechanicalModel> model, SampleSink* sink, OfflineResult* r) {
+  OneStepRun run(c, model, sink, r);
+  auto coherence = startCoherenceFilter(c, series, run.propagator(), run.settings());
+  for (const Measurement& m : series) run.process(m);
+  run.finish(series.size(), coherence.get());
 }
 
 // Posterior-predictive check at the final mean (health.predictive_check).
@@ -199,13 +106,14 @@ void checkPrediction(const EstimatorConfig& c, const MeasurementSeries& series,
 
 void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
               std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
-              OfflineResult* r) {
+              SampleSink* sink, OfflineResult* r) {
   const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
+  if (sink) sink->begin(columnsOf(c, {}));
   const BatchOutcome o = runBatchEstimate(c, *prop, series, alphas);
   const BatchResult& b = o.result;
-  SampleRecord rec{b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev,
-                   b.coefficients, b.nis, false, true, b.finite && b.forecast.ok, {}};
-  r->records.push_back(rec);
+  give({b.iterations, series.empty() ? 0.0 : series.back().time, b.mean, b.stddev, b.coefficients,
+        b.nis, false, true, b.finite && b.forecast.ok, {}},
+       sink, r);
   summarise(c, b.mean, b.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler, b.coefficients);
   r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
@@ -217,17 +125,19 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
 
 void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
              std::shared_ptr<const MechanicalModel> model, std::uint64_t seed,
-             const ProgressCallback& progress, OfflineResult* r) {
+             const ProgressCallback& progress, SampleSink* sink, OfflineResult* r) {
   EnkfSettings s = makeEnkfSettings(c);
   s.seed = c.enkf.seed + seed;
   EnsembleKalmanFilter enkf(model, ParameterMapping(*model, c.uncertain), s);
+  if (sink) sink->begin(columnsOf(c, {}));
   EnkfStep last;
   int frozen = 0;
   for (std::size_t i = 0; i < series.size(); ++i) {
     last = enkf.process(series[i]);
     frozen = std::max(frozen, last.inadmissible_members);
-    r->records.push_back({last.index, last.time, last.mean, last.stddev, Eigen::MatrixXd(),
-                          last.nis, false, true, last.finite, {}});
+    give({last.index, last.time, last.mean, last.stddev, Eigen::MatrixXd(), last.nis, false, true,
+          last.finite, {}},
+         sink, r);
     if (progress && (i + 1) % 10 == 0) {
       progress("enkf: sample " + std::to_string(i + 1) + "/" + std::to_string(series.size()));
     }
@@ -246,13 +156,15 @@ void runEnkf(const EstimatorConfig& c, const MeasurementSeries& series,
 
 void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
              std::shared_ptr<const MechanicalModel> model, const ProgressCallback& progress,
-             const CoarseGridCache* cache, OfflineResult* r) {
+             const CoarseGridCache* cache, SampleSink* sink, OfflineResult* r) {
+  if (sink) sink->begin(columnsOf(c, {}));
   const ReferencePosterior p = computeReferencePosterior(
       *model, ParameterMapping(*model, c.uncertain), series, c.measurement.noise, c.integration,
       makeReferenceSettings(c), cache, progress);
   summarise(c, p.mean, p.stddev, r);
-  r->records.push_back({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time,
-                        p.mean, p.stddev, Eigen::MatrixXd(), 0.0, false, true, true, {}});
+  give({static_cast<int>(series.size()), series.empty() ? 0.0 : series.back().time, p.mean,
+        p.stddev, Eigen::MatrixXd(), 0.0, false, true, true, {}},
+       sink, r);
   r->pdfs = p.marginals;
   r->integrations = p.simulations;
   r->modes = static_cast<int>(p.modes.size());
@@ -300,11 +212,50 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
   return o;
 }
 
+OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const MeasurementSeries& readings,
+                                 SampleSink* samples) {
+  if (readings.empty()) throw std::invalid_argument(c.source + ": no samples to estimate from");
+  checkRoadFreeRecord(c, readings);  // a refused sample fails now, not hours in
+  const auto start = std::chrono::steady_clock::now();
+  OfflineResult r;
+  r.method = toString(EstimationMethod::kOneStep);
+  r.update = toString(c.update);
+  r.samples = static_cast<int>(readings.size());
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &readings));
+  OneStepRun run(c, stream.model(), samples, &r);
+  // The coherence filter in step with the stream: the inputs it reads are
+  // appended, and forgotten once neither filter needs them.
+  const std::size_t k = static_cast<std::size_t>(c.health.coherence_decimation);
+  std::optional<OneStepFilter> coarse;
+  if (coherenceRuns(c, readings.size())) {
+    coarse.emplace(run.propagator().withThreads(1), coherenceSettings(run.settings()));
+  }
+  std::optional<StepResult> decimated;
+  Measurement outputs;
+  for (std::size_t i = 0; i < readings.size(); ++i) {
+    const std::string problem = stream.add(readings[i], &outputs);
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, i, readings[i], problem));
+    run.process(outputs);
+    if (coarse && (i + 1) % k == 0) decimated = coarse->process(outputs);
+    const double needed = run.filter().roadNeededFrom();
+    stream.forgetInputs(coarse ? std::min(needed, coarse->roadNeededFrom()) : needed,
+                        -std::numeric_limits<double>::infinity());
+  }
+  run.finish(readings.size(), decimated);
+  const std::string caveat = roadFreeCaveat(c);
+  if (!caveat.empty()) {
+    r.healthy = false;
+    r.warnings.push_back(caveat);
+  }
+  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return r;
+}
+
 OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSeries& series,
                                    std::shared_ptr<const MechanicalModel> model,
                                    EstimationMethod method, std::uint64_t seed,
                                    const ProgressCallback& progress,
-                                   const CoarseGridCache* grid_cache) {
+                                   const CoarseGridCache* grid_cache, SampleSink* samples) {
   // Possible with synthetic data whose truth.timing.drop_fraction lost every sample.
   if (series.empty()) throw std::invalid_argument(c.source + ": no samples to estimate from");
   const auto start = std::chrono::steady_clock::now();
@@ -313,15 +264,18 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
   r.update = toString(c.update);
   r.samples = static_cast<int>(series.size());
   switch (method) {
-    case EstimationMethod::kOneStep: runOneStep(c, series, model, &r); break;
+    case EstimationMethod::kOneStep: runOneStep(c, series, model, samples, &r); break;
     case EstimationMethod::kWholeSet:
-      runBatch(c, series, makePropagator(batchDesignConfig(c), model), {1.0}, &r);
+      runBatch(c, series, makePropagator(batchDesignConfig(c), model), {1.0}, samples, &r);
       break;
     case EstimationMethod::kEsMda:
-      runBatch(c, series, makePropagator(batchDesignConfig(c), model), c.es_mda.alphas, &r);
+      runBatch(c, series, makePropagator(batchDesignConfig(c), model), c.es_mda.alphas, samples,
+               &r);
       break;
-    case EstimationMethod::kEnkf: runEnkf(c, series, model, seed, progress, &r); break;
-    case EstimationMethod::kGrid: runGrid(c, series, model, progress, grid_cache, &r); break;
+    case EstimationMethod::kEnkf: runEnkf(c, series, model, seed, progress, samples, &r); break;
+    case EstimationMethod::kGrid:
+      runGrid(c, series, model, progress, grid_cache, samples, &r);
+      break;
   }
   const std::string caveat = roadFreeCaveat(c);
   if (!caveat.empty()) {

@@ -2,7 +2,7 @@
 // comes from nlohmann::json: numbers in their shortest round-trip form (a
 // reader gets the same double), strings escaped as JSON requires, non-finite
 // numbers as null.
-#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -13,7 +13,7 @@
 
 #include "pc_ekf/io/number_text.h"
 #include "pc_ekf/io/offline_estimation.h"
-#include "pc_ekf/pc/in_parts.h"
+#include "pc_ekf/io/samples_csv.h"
 
 namespace pc_ekf {
 namespace {
@@ -61,32 +61,6 @@ std::ofstream openOutput(const std::string& path) {
   if (!out) throw std::runtime_error(path + ": cannot write");
   out << std::setprecision(std::numeric_limits<double>::max_digits10);
   return out;
-}
-
-// One row of samples.csv (appendG17: the stream's %.17g digits).
-void appendSampleRow(std::string& text, const SampleRecord& s, std::size_t loo_channels, int terms) {
-  text += std::to_string(s.index);
-  text += ',';
-  appendG17(text, s.time);
-  for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
-    text += ',';
-    appendG17(text, s.mean[i]);
-    text += ',';
-    appendG17(text, s.stddev[i]);
-    for (int j = 0; j < terms; ++j) {
-      text += ',';
-      appendG17(text, s.coefficients(i, j));
-    }
-  }
-  text += ',';
-  appendG17(text, s.nis);
-  for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) text += flag ? ",1" : ",0";
-  // Empty cells: no leave-one-out error for this sample (a point left out).
-  for (std::size_t i = 0; i < loo_channels; ++i) {
-    text += ',';
-    if (static_cast<std::size_t>(s.loo_error.size()) == loo_channels) appendG17(text, s.loo_error[i]);
-  }
-  text += '\n';
 }
 
 }  // namespace
@@ -157,6 +131,18 @@ std::string toJson(const OfflineResult& r) {
   j["damped_updates"] = r.damped_updates;
   j["reopened"] = r.reopened;
   j["relinearized"] = r.relinearized;
+  if (r.load_tracking) {
+    nlohmann::json events = nlohmann::json::array();
+    for (const LoadChangeEvent& e : r.load_changes) {
+      nlohmann::json load = nlohmann::json::object();
+      for (const ParameterSummary& p : e.load) load[p.name] = {{"mean", p.mean}, {"stddev", p.stddev}};
+      events.push_back({{"began_s", e.began}, {"found_s", e.found}, {"load", load}});
+    }
+    j["load_changes"] = events;
+  }
+  if (std::isfinite(r.clock_offset)) {
+    j["clock_offset"] = {{"mean_s", r.clock_offset}, {"stddev_s", r.clock_offset_std}};
+  }
   if (r.method == "grid") {
     j["modes"] = r.modes;
     j["border_mass"] = r.border_mass;
@@ -175,49 +161,29 @@ std::string toJson(const OfflineResult& r) {
   return j.dump(1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
-void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
+OfflineOutputs::OfflineOutputs(const std::string& dir) : dir_(dir) {
   makeDirectory(dir);
-  std::ofstream json = openOutput(dir + "/result.json");
-  json << toJson(r);
-
-  // The CSVs are built as text first (appendG17: the stream's %.17g digits).
-  std::string text = "index,t";
-  const int terms = r.records.empty() ? 0 : static_cast<int>(r.records[0].coefficients.cols());
-  for (const auto& p : r.parameters) {
-    text += ',' + p.name + "_mean," + p.name + "_stddev";
-    for (int j = 0; j < terms; ++j) text += ',' + p.name + "_c" + std::to_string(j);
+  // Never a previous run's result beside this run's rows.
+  for (const char* name : {"/result.json", "/pdfs.csv"}) {
+    std::error_code ignored;
+    std::filesystem::remove(dir + name, ignored);
   }
-  text += ",nis,nis_window_outside,band_nested,healthy";
-  for (const auto& channel : r.loo_channels) text += ",loo_" + channel;
-  text += '\n';
-  std::ofstream samples = openOutput(dir + "/samples.csv");
-  samples << text;
-  // Rows formatted in rounds, each round in parts on the machine's threads,
-  // then written in order; each part's buffer is reused round after round.
-  // The file's text is never in memory whole: on the development VM a fresh
-  // page costs more than formatting what fills it (a 43 MB samples.csv held
-  // whole: 10^4 more page faults, about a third of the writing).
-  const int rows = static_cast<int>(r.records.size());
-  const int threads = std::max(1, std::min(machineThreads(), rows / 16));
-  constexpr int kRowsPerPart = 32;
-  std::vector<std::string> part_text(static_cast<std::size_t>(threads));
-  for (int first = 0; first < rows; first += threads * kRowsPerPart) {
-    const int count = std::min(rows - first, threads * kRowsPerPart);
-    const int parts = std::min(threads, count);
-    inNumberedParts(count, parts, [&](int part, int begin, int end) {
-      std::string& out = part_text[static_cast<std::size_t>(part)];
-      out.clear();
-      for (int k = first + begin; k < first + end; ++k) {
-        appendSampleRow(out, r.records[static_cast<std::size_t>(k)], r.loo_channels.size(), terms);
-      }
-    });
-    for (int part = 0; part < parts; ++part) {
-      const std::string& t = part_text[static_cast<std::size_t>(part)];
-      samples.write(t.data(), static_cast<std::streamsize>(t.size()));
-    }
-  }
+  samples_ = std::make_unique<SamplesCsv>(dir + "/samples.csv");
+}
 
-  text = "parameter,bin_low,bin_high,density\n";
+OfflineOutputs::~OfflineOutputs() = default;
+
+void OfflineOutputs::begin(const SampleColumns& columns) { samples_->begin(columns); }
+
+void OfflineOutputs::add(const SampleRecord& record) { samples_->add(record); }
+
+void OfflineOutputs::finish(const OfflineResult& r) {
+  SampleColumns columns;
+  for (const ParameterSummary& p : r.parameters) columns.parameters.push_back(p.name);
+  columns.loo_channels = r.loo_channels;
+  samples_->close(columns);
+
+  std::string text = "parameter,bin_low,bin_high,density\n";
   for (std::size_t i = 0; i < r.pdfs.size() && i < r.parameters.size(); ++i) {
     const Histogram& h = r.pdfs[i];
     for (Eigen::Index b = 0; b < h.densities.size(); ++b) {
@@ -229,9 +195,13 @@ void writeOfflineOutputs(const OfflineResult& r, const std::string& dir) {
       text += '\n';
     }
   }
-  std::ofstream pdfs = openOutput(dir + "/pdfs.csv");
+  std::ofstream pdfs = openOutput(dir_ + "/pdfs.csv");
   pdfs << text;
-  if (!samples || !pdfs || !json) throw std::runtime_error(dir + ": writing the outputs failed");
+  pdfs.close();
+  std::ofstream json = openOutput(dir_ + "/result.json");
+  json << toJson(r);
+  json.close();
+  if (!pdfs || !json) throw std::runtime_error(dir_ + ": writing the outputs failed");
 }
 
 }  // namespace pc_ekf

@@ -153,6 +153,19 @@ bool RoadFreeStream::waitingForInputs(const Measurement& m) const {
   return false;
 }
 
+std::string droppedWarning(std::size_t dropped, const std::string& first_problem) {
+  if (dropped == 0) return "";
+  return std::to_string(dropped) + " sample(s) before every road-free input had been "
+         "read dropped, as estimator_node drops them (from " + first_problem +
+         "); the record goes on from sample " + std::to_string(dropped + 1);
+}
+
+std::string roadFreeRefusal(const EstimatorConfig& c, std::size_t k, const Measurement& m,
+                            const std::string& problem) {
+  return c.source + ": road.source none: sample " + std::to_string(k + 1) + " (t = " +
+         std::to_string(m.time) + " s): " + problem;
+}
+
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
   RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record));
   RoadFreeRecord r;
@@ -169,22 +182,57 @@ RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries&
       if (r.dropped++ == 0) first_problem = where(k) + ": " + problem;
       continue;
     }
-    if (!problem.empty()) {
-      throw ConfigError(c.source + ": road.source none: " + where(k) + ": " + problem);
-    }
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, k, record[k], problem));
     r.outputs.push_back(std::move(out));
   }
   if (r.outputs.empty() && r.dropped > 0) {
     throw ConfigError(c.source + ": road.source none: no sample has every road-free input (" +
                       std::to_string(r.dropped) + " samples; " + first_problem + ")");
   }
-  if (r.dropped > 0) {
-    r.warning = std::to_string(r.dropped) + " sample(s) before every road-free input had been "
-                "read dropped, as estimator_node drops them (from " + first_problem +
-                "); the record goes on from sample " + std::to_string(r.dropped + 1);
-  }
+  r.warning = droppedWarning(r.dropped, first_problem);
   r.model = stream.model();
   return r;
+}
+
+RoadFreeCheck checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
+  // The stream refuses what its inputs refuse (the travel blend keeps a
+  // reading finite): the raw inputs through inputs of their own, forgotten
+  // as they go.
+  const std::vector<std::string> names = RoadFreeStream::inputsFor(c, &record);
+  std::vector<int> channels;
+  for (const std::string& name : names) {
+    channels.push_back(c.model_type->description().channelIndex(name));
+  }
+  ReadingInputs inputs(names);
+  std::vector<double> in(names.size());
+  RoadFreeCheck check;
+  std::string first_problem;
+  for (std::size_t k = 0; k < record.size(); ++k) {
+    const Measurement& m = record[k];
+    std::fill(in.begin(), in.end(), std::numeric_limits<double>::quiet_NaN());
+    for (std::size_t j = 0; j < m.channels.size(); ++j) {
+      const auto it = std::find(channels.begin(), channels.end(), m.channels[j]);
+      if (it == channels.end()) continue;
+      in[static_cast<std::size_t>(it - channels.begin())] = m.values[static_cast<Eigen::Index>(j)];
+    }
+    const bool waiting = std::isfinite(m.time) && check.dropped == k &&
+                         std::any_of(in.begin(), in.end(), [](double v) { return std::isnan(v); });
+    const std::string problem = inputs.append(m.time, in.data());
+    if (!problem.empty() && waiting) {  // as estimator_node and roadFreeRecord: dropped
+      if (check.dropped++ == 0) {
+        first_problem = "sample 1 (t = " + std::to_string(m.time) + " s): " + problem;
+      }
+      continue;
+    }
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, k, m, problem));
+    inputs.forget(m.time, -std::numeric_limits<double>::infinity());
+  }
+  if (check.dropped == record.size() && check.dropped > 0) {
+    throw ConfigError(c.source + ": road.source none: no sample has every road-free input (" +
+                      std::to_string(check.dropped) + " samples; " + first_problem + ")");
+  }
+  check.warning = droppedWarning(check.dropped, first_problem);
+  return check;
 }
 
 std::string roadFreeCaveat(const EstimatorConfig& c) {

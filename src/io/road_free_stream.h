@@ -49,6 +49,14 @@ class RoadFreeStream {
   // to hold that input at. Such samples are dropped (estimator_node rejects
   // them; roadFreeRecord drops and counts them).
   bool waitingForInputs(const Measurement& m) const;
+  // The inputs no estimator needs any more forgotten (ReadingInputs::forget):
+  // `needed_from` the estimators' oldest time (EstimatorRun::oldestTime,
+  // OneStepFilter::roadNeededFrom), `kept_until` the last sample a batch
+  // over the record's first samples reads (-infinity: none). A stream that
+  // runs for hours then holds a bounded tail, not the record.
+  void forgetInputs(double needed_from, double kept_until) {
+    inputs_->forget(needed_from, kept_until);
+  }
 
  private:
   // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +
@@ -90,6 +98,20 @@ struct RoadFreeRecord {
   std::string warning;      // what was dropped ("" when nothing)
 };
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+// Throws the ConfigError roadFreeRecord would for the first sample a stream
+// would refuse, without splitting anything (cheap; memory does not grow);
+// returns the leading samples roadFreeRecord would drop (before every input
+// had been read) and its warning.
+struct RoadFreeCheck {
+  std::size_t dropped = 0;
+  std::string warning;
+};
+RoadFreeCheck checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+// roadFreeRecord's warning for `dropped` leading samples ("" for none).
+std::string droppedWarning(std::size_t dropped, const std::string& first_problem);
+// That error's text for sample k (0-based) and the stream's reason.
+std::string roadFreeRefusal(const EstimatorConfig& c, std::size_t k, const Measurement& m,
+                            const std::string& problem);
 
 // Why a road-free estimate of this config is not to be trusted, or empty.
 // The full car's with accel_y is not: on its own synthetic drives the load's

@@ -134,6 +134,19 @@ FullCarRoadFreeModel::FullCarRoadFreeModel(const FullCarParameters& nominal,
         "road-free full car: inputs must be u_fl .. u_rr, v_fl .. v_rr [gyro_x gyro_y]");
   }
   h_.bottomRows(4).setIdentity();
+  // With tare the record weighs the load (inputNoiseBySample): the springs'
+  // force at the nominal vehicle, summed over the samples as they come.
+  if (zero_ == ZeroConvention::kTare) {
+    const auto p0 = constants(Eigen::MatrixXd(nominal_vector_))->points.front();
+    spring_force_sum_ = inputs_->addSampleSum([p0](const double* in) {
+      double f = 0.0;
+      for (int i = 0; i < 4; ++i) {
+        const double x = p0.delta_ref[i] - in[i];
+        f += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+      return f;
+    });
+  }
 }
 
 FullCarRoadFreeModel::~FullCarRoadFreeModel() = default;
@@ -208,19 +221,9 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
   }
   Eigen::VectorXd vehicle = nominal_vector_;
   if (zero_ == ZeroConvention::kTare) {  // the load the record weighs
-    const auto c0 = constants(Eigen::MatrixXd(vehicle));
-    const auto& p0 = c0->points.front();
     const int body = fullCarDescription().parameters().at("body_mass");
     const int added = fullCarDescription().parameters().at("added_mass");
-    const auto springs = [&](const double* in) {
-      double f = 0.0;
-      for (int i = 0; i < 4; ++i) {
-        const double x = p0.delta_ref[i] - in[i];
-        f += p0.k[i] * x + p0.k3[i] * x * x * x;
-      }
-      return f;
-    };
-    vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[body],
+    vehicle[added] = weighedLoad(*inputs_, spring_force_sum_, mean_accel_z, vehicle[body],
                                  4.0 * std::max(vehicle[added], vehicle[body]), vehicle[added]);
   }
   std::shared_ptr<const FullCarRoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
@@ -246,7 +249,7 @@ Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& 
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
   return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
-                         inputs_->times().size(), 12);
+                                 inputs_->samples(), 12);
 }
 
 }  // namespace pc_ekf

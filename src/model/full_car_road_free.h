@@ -65,6 +65,7 @@ class FullCarRoadFreeModel : public MechanicalModel {
   Eigen::VectorXd nominal_vector_;
   std::vector<std::string> state_names_;
   Eigen::MatrixXd h_;
+  int spring_force_sum_ = -1;  // tare: ReadingInputs::sampleSum's handle
 };
 
 }  // namespace pc_ekf

@@ -12,7 +12,6 @@ Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t
                                         const ReadingOutputs& evaluate) {
   const int n = inputs.count();
   const int m = static_cast<int>(integrated.size());
-  const std::vector<double>& t = inputs.times();
   std::vector<double> now0(static_cast<std::size_t>(n)), before0(now0.size()), now(now0.size()),
       before(now0.size()), attitude(static_cast<std::size_t>(std::max(m, 1)));
   std::vector<double> plus(static_cast<std::size_t>(outputs)), minus(plus.size());
@@ -22,17 +21,18 @@ Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t
   // correlated noise (a blended travel) adds rho (d_now d_before' + its transpose).
   Eigen::MatrixXd now_change = Eigen::MatrixXd::Zero(n, outputs), before_change = now_change;
   const bool at_rest = k == 0;
-  const double dt = t[k] - (at_rest ? 0.0 : t[k - 1]);
-  inputs.at(t[k], now0.data());
+  const double t = inputs.time(k), t_before = at_rest ? 0.0 : inputs.time(k - 1);
+  const double dt = t - t_before;
+  inputs.at(t, now0.data());
   std::fill(before0.begin(), before0.end(), 0.0);
-  if (!at_rest) inputs.at(t[k - 1], before0.data());
+  if (!at_rest) inputs.at(t_before, before0.data());
   for (int which = 0; which < 2 * n + m; ++which) {
     const bool angle = which >= 2 * n;
     const int i = angle ? integrated[static_cast<std::size_t>(which - 2 * n)] : which % n;
     if (!angle && which >= n && at_rest) continue;  // nothing read before the first sample
     const double reading = which < n ? now0[i] : before0[i];
     if (angle && inputs.integralInState()) continue;  // the estimator's own state
-    const double step = angle ? absolute[i] * std::sqrt(dt * t[k])
+    const double step = angle ? absolute[i] * std::sqrt(dt * t)
                               : std::hypot(absolute[i], relative[i] * reading);
     if (!(step > 0.0)) continue;
     for (const int sign : {1, -1}) {
@@ -70,16 +70,11 @@ Eigen::VectorXd meanVarianceOverSamples(const std::function<Eigen::MatrixXd(std:
   return sum / static_cast<double>(std::max<std::size_t>(samples, 1));
 }
 
-double weighedLoad(const ReadingInputs& inputs, const std::function<double(const double*)>& spring_force,
-                   double mean_accel_z, double body_mass, double limit, double fallback) {
+double weighedLoad(const ReadingInputs& inputs, int spring_force_sum, double mean_accel_z,
+                   double body_mass, double limit, double fallback) {
   if (!(mean_accel_z > 0.0)) return fallback;
-  std::vector<double> in(static_cast<std::size_t>(inputs.count()));
-  double force = 0.0;
-  for (double tk : inputs.times()) {
-    inputs.at(tk, in.data());
-    force += spring_force(in.data());
-  }
-  const double load = force / static_cast<double>(inputs.times().size()) / mean_accel_z - body_mass;
+  const double force = inputs.sampleSum(spring_force_sum);
+  const double load = force / static_cast<double>(inputs.samples()) / mean_accel_z - body_mass;
   return std::isfinite(load) ? std::clamp(load, 0.0, limit) : fallback;
 }
 

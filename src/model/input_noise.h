@@ -33,14 +33,15 @@ Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t
                                         const ReadingOutputs& evaluate);
 
 // The mean of the diagonal of `at` (per model channel, `channels` square)
-// over samples 0..n-1.
+// over samples 0..n-1 (a whole record: none forgotten).
 Eigen::VectorXd meanVarianceOverSamples(const std::function<Eigen::MatrixXd(std::size_t)>& at,
                                         std::size_t samples, int channels);
 
-// The load a tare record weighs: the springs' mean force (`spring_force` of
-// the inputs at a sample) over the record's mean accel_z, less the body
-// mass, clamped to [0, limit]; `fallback` when it cannot be told.
-double weighedLoad(const ReadingInputs& inputs, const std::function<double(const double*)>& spring_force,
-                   double mean_accel_z, double body_mass, double limit, double fallback);
+// The load a tare record weighs: the springs' mean force over the samples
+// (inputs.sampleSum(spring_force_sum): the springs' force at each sample's
+// inputs, summed as they came) over the record's mean accel_z, less the
+// body mass, clamped to [0, limit]; `fallback` when it cannot be told.
+double weighedLoad(const ReadingInputs& inputs, int spring_force_sum, double mean_accel_z,
+                   double body_mass, double limit, double fallback);
 
 }  // namespace pc_ekf

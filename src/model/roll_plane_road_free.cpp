@@ -123,6 +123,19 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
     throw std::invalid_argument("road-free roll plane: inputs must be u1 u2 v1 v2 [gyro_x]");
   }
   h_.bottomRows(3).setIdentity();
+  // With tare the record weighs the load (inputNoiseBySample): the springs'
+  // force at the nominal vehicle, summed over the samples as they come.
+  if (zero_ == ZeroConvention::kTare) {
+    const RoadFreeConstants::Point p0 = constants(Eigen::MatrixXd(nominal_vector_))->points.front();
+    spring_force_sum_ = inputs_->addSampleSum([p0](const double* in) {
+      double f = 0.0;
+      for (int i = 0; i < 2; ++i) {
+        const double x = p0.delta_ref[i] - in[kU1 + i];
+        f += p0.k[i] * x + p0.k3[i] * x * x * x;
+      }
+      return f;
+    });
+  }
 }
 
 bool RollPlaneRoadFreeModel::channelModelled(int channel) const {
@@ -199,19 +212,9 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
   Eigen::VectorXd vehicle = nominal_vector_;
   // With tare the record weighs the load (the derivatives scale with 1 / (m + M)).
   if (zero_ == ZeroConvention::kTare) {
-    const auto c0 = constants(Eigen::MatrixXd(vehicle));
-    const RoadFreeConstants::Point& p0 = c0->points.front();
     const int m = rollPlaneDescription().parameters().at("bar_mass");
     const int added = rollPlaneDescription().parameters().at("added_mass");
-    const auto springs = [&](const double* in) {
-      double f = 0.0;
-      for (int i = 0; i < 2; ++i) {
-        const double x = p0.delta_ref[i] - in[kU1 + i];
-        f += p0.k[i] * x + p0.k3[i] * x * x * x;
-      }
-      return f;
-    };
-    vehicle[added] = weighedLoad(*inputs_, springs, mean_accel_z, vehicle[m],
+    vehicle[added] = weighedLoad(*inputs_, spring_force_sum_, mean_accel_z, vehicle[m],
                                  4.0 * std::max(vehicle[added], vehicle[m]), vehicle[added]);
   }
   std::shared_ptr<const RoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
@@ -236,7 +239,7 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
   return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
-                         inputs_->times().size(), 7);
+                                 inputs_->samples(), 7);
 }
 
 }  // namespace pc_ekf

@@ -6,13 +6,13 @@
 #include <rosbag/exceptions.h>
 #include <rosbag/view.h>
 
-#include <boost/make_shared.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
+#include <optional>
 #include <set>
 #include <sstream>
 
@@ -77,13 +77,16 @@ std::string findTopic(const std::string& path, rosbag::Bag& bag, const std::stri
   return matches.empty() ? std::string() : *matches.begin();
 }
 
+// Decodes the messages on `topic` one at a time, each to `take`: a long
+// bag's messages are never held (their objects are many times the numbers
+// they carry).
 template <typename T>
-std::vector<typename T::ConstPtr> readTopic(const std::string& path, rosbag::Bag& bag,
-                                            const std::string& topic) {
-  std::vector<typename T::ConstPtr> out;
-  if (topic.empty()) return out;
+void readTopic(const std::string& path, rosbag::Bag& bag, const std::string& topic,
+               const std::function<void(const T&)>& take) {
+  if (topic.empty()) return;
   rosbag::View view(bag, rosbag::TopicQuery(topic));
   std::vector<std::uint8_t> bytes;
+  std::size_t read = 0;
   for (const rosbag::MessageInstance& m : view) {
     // roscpp resizes a vector to the length stored in the message before it
     // checks the bytes are there: check the lengths first (bag_check.h).
@@ -94,16 +97,32 @@ std::vector<typename T::ConstPtr> readTopic(const std::string& path, rosbag::Bag
         serializedMessageProblem(ros::message_traits::Definition<T>::value(),
                                  ros::message_traits::DataType<T>::value(), bytes.data(), bytes.size());
     if (!problem.empty()) {
-      throw BagError(path + ": message " + std::to_string(out.size() + 1) + " on '" + topic +
+      throw BagError(path + ": message " + std::to_string(read + 1) + " on '" + topic +
                      "' cannot be decoded: " + problem);
     }
-    const auto msg = boost::make_shared<T>();
+    T msg;
     ros::serialization::IStream in(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
-    ros::serialization::deserialize(in, *msg);
-    out.push_back(msg);
+    ros::serialization::deserialize(in, msg);
+    ++read;
+    take(msg);
   }
-  return out;
 }
+
+// Road messages as read: stamps and heights only, sorted by stamp once all
+// are in.
+struct RoadRows {
+  std::vector<ros::Time> stamps;
+  std::vector<double> heights;  // per message: one per contact
+  std::vector<std::pair<std::size_t, std::string>> problems;  // (message, why), message order
+  // Message indices by stamp (stable: equal stamps in message order).
+  std::vector<std::size_t> byStamp() const {
+    std::vector<std::size_t> order(stamps.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [this](std::size_t a, std::size_t b) { return stamps[a] < stamps[b]; });
+    return order;
+  }
+};
 
 struct StampedSample {
   std::int64_t ns = 0;
@@ -117,10 +136,27 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
   std::stable_sort(raw.begin(), raw.end(),
                    [](const StampedSample& a, const StampedSample& b) { return a.ns < b.ns; });
   MeasurementSeries out;
+  out.reserve(raw.size());
+  stamps->reserve(raw.size());
   std::vector<double> values(channels);
   std::vector<bool> seen(channels);
   for (std::size_t i = 0; i < raw.size();) {
     std::size_t j = i;
+    // A sample alone at its stamp with its channels in order is moved as it
+    // is (the record is not held twice).
+    Measurement& first = raw[i].m;
+    if ((i + 1 == raw.size() || raw[i + 1].ns != raw[i].ns) &&
+        std::adjacent_find(first.channels.begin(), first.channels.end(),
+                           std::greater_equal<int>()) == first.channels.end()) {
+      Measurement alone;
+      alone.time = first.time;
+      alone.channels = std::move(first.channels);
+      alone.values = std::move(first.values);
+      out.push_back(std::move(alone));
+      stamps->push_back(raw[i].ns);
+      ++i;
+      continue;
+    }
     std::fill(values.begin(), values.end(), 0.0);
     std::fill(seen.begin(), seen.end(), false);
     for (; j < raw.size() && raw[j].ns == raw[i].ns; ++j) {
@@ -153,60 +189,60 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
 }
 
 // Road: by header stamp; the first stamp is the time origin.
-void readTwoContactRoad(const std::string& path, BagRecord& record,
-                        std::vector<RoadProfile::ConstPtr>& road_msgs) {
-  std::stable_sort(road_msgs.begin(), road_msgs.end(),
-                   [](const RoadProfile::ConstPtr& a, const RoadProfile::ConstPtr& b) {
-                     return a->header.stamp < b->header.stamp;
-                   });
-  record.origin = road_msgs.front()->header.stamp;
+void readTwoContactRoad(const std::string& path, BagRecord& record, const RoadRows& rows) {
+  const std::vector<std::size_t> order = rows.byStamp();
+  record.origin = rows.stamps[order.front()];
   record.road_contacts.heights.resize(2);
-  for (std::size_t i = 0; i < road_msgs.size(); ++i) {
-    const RoadProfile& r = *road_msgs[i];
-    if (i > 0 && r.header.stamp == road_msgs[i - 1]->header.stamp) {
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const std::size_t r = order[i];
+    const ros::Time& stamp = rows.stamps[r];
+    if (i > 0 && stamp == rows.stamps[order[i - 1]]) {
       throw BagError(path + ": two '" + record.road_topic + "' messages stamped " +
-                     stampText(r.header.stamp));
+                     stampText(stamp));
     }
-    if (!std::isfinite(r.left) || !std::isfinite(r.right)) {
-      throw BagError(path + ": '" + record.road_topic + "' message stamped " +
-                     stampText(r.header.stamp) + " has a non-finite height");
+    const double left = rows.heights[2 * r], right = rows.heights[2 * r + 1];
+    if (!std::isfinite(left) || !std::isfinite(right)) {
+      throw BagError(path + ": '" + record.road_topic + "' message stamped " + stampText(stamp) +
+                     " has a non-finite height");
     }
-    const double t = secondsSince(r.header.stamp, record.origin);
+    const double t = secondsSince(stamp, record.origin);
     record.road_contacts.t.push_back(t);
-    record.road_contacts.heights[0].push_back(r.left);
-    record.road_contacts.heights[1].push_back(r.right);
+    record.road_contacts.heights[0].push_back(left);
+    record.road_contacts.heights[1].push_back(right);
   }
 }
 
-void readContactRoad(const std::string& path, BagRecord& record,
-                     std::vector<RoadHeights::ConstPtr>& msgs,
+void readContactRoad(const std::string& path, BagRecord& record, const RoadRows& rows,
                      const std::vector<std::string>& contacts) {
-  std::stable_sort(msgs.begin(), msgs.end(),
-                   [](const RoadHeights::ConstPtr& a, const RoadHeights::ConstPtr& b) {
-                     return a->header.stamp < b->header.stamp;
-                   });
-  record.origin = msgs.front()->header.stamp;
+  const std::vector<std::size_t> order = rows.byStamp();
+  record.origin = rows.stamps[order.front()];
   record.road_contacts.heights.resize(contacts.size());
-  std::vector<double> heights;
-  for (std::size_t i = 0; i < msgs.size(); ++i) {
-    const RoadHeights& r = *msgs[i];
-    if (i > 0 && r.header.stamp == msgs[i - 1]->header.stamp) {
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    const std::size_t r = order[i];
+    const ros::Time& stamp = rows.stamps[r];
+    if (i > 0 && stamp == rows.stamps[order[i - 1]]) {
       throw BagError(path + ": two '" + record.road_topic + "' messages stamped " +
-                     stampText(r.header.stamp));
+                     stampText(stamp));
     }
-    const std::string problem = roadHeightsInOrder(r, contacts, &heights);
-    if (!problem.empty()) {
-      throw BagError(path + ": '" + record.road_topic + "' message stamped " +
-                     stampText(r.header.stamp) + ": " + problem);
+    const auto problem = std::lower_bound(
+        rows.problems.begin(), rows.problems.end(), r,
+        [](const std::pair<std::size_t, std::string>& p, std::size_t m) { return p.first < m; });
+    if (problem != rows.problems.end() && problem->first == r) {
+      throw BagError(path + ": '" + record.road_topic + "' message stamped " + stampText(stamp) +
+                     ": " + problem->second);
     }
-    record.road_contacts.t.push_back(secondsSince(r.header.stamp, record.origin));
-    for (std::size_t c = 0; c < contacts.size(); ++c) record.road_contacts.heights[c].push_back(heights[c]);
+    record.road_contacts.t.push_back(secondsSince(stamp, record.origin));
+    for (std::size_t c = 0; c < contacts.size(); ++c) {
+      record.road_contacts.heights[c].push_back(rows.heights[r * contacts.size() + c]);
+    }
   }
 }
 
-// The IMU channels of every sample by the rule of imu_alignment.h (the node's).
-void alignBagImu(const std::string& path, const BagReadOptions& options,
-                 const std::vector<sensor_msgs::Imu::ConstPtr>& msgs,
+// The IMU channels of every sample by the rule of imu_alignment.h (the
+// node's), its messages read one at a time: each sample is aligned once a
+// reading at or after its stamp is in (as alignImuRecord with every reading,
+// which is what the node does live), and readings no later sample needs go.
+void alignBagImu(const std::string& path, rosbag::Bag& bag, const BagReadOptions& options,
                  const std::vector<std::int64_t>& stamps, BagRecord& record) {
   if (record.imu_topic.empty()) {
     record.warnings.push_back("measurement.channels select IMU channels but " + path +
@@ -214,25 +250,47 @@ void alignBagImu(const std::string& path, const BagReadOptions& options,
                               options.imu_topic + "': samples without IMU channels");
     return;
   }
-  std::vector<ImuReading> readings;
-  readings.reserve(msgs.size());
-  for (const auto& msg : msgs) {
-    ++record.imu_messages;
-    ImuConversion c = readingFromImu(*msg, options.imu);
-    record.imu_problems += static_cast<int>(c.problems.size());
-    for (const auto& p : c.problems) {
-      record.warnings.push_back("'" + record.imu_topic + "' message stamped " +
-                                stampText(msg->header.stamp) + ": " + p);
+  ImuAligner aligner(options.imu_max_gap);
+  ImuAlignmentCounts& n = record.imu;
+  std::size_t next = 0;
+  const auto alignReady = [&](bool all) {
+    for (; next < record.samples.size() && (all || aligner.ready(stamps[next])); ++next) {
+      switch (aligner.align(record.samples[next], stamps[next])) {
+        case ImuAlignment::kAligned:
+          ++n.aligned;
+          break;
+        case ImuAlignment::kNoBracket:
+          ++n.no_bracket;
+          break;
+        case ImuAlignment::kGap:
+          ++n.gap;
+          break;
+      }
     }
-    if (c.empty()) {
-      ++record.imu_empty;
-      continue;
-    }
-    readings.push_back(std::move(c.reading));
+  };
+  try {
+    // Bag (record) order: the order a live node receives them in.
+    readTopic<sensor_msgs::Imu>(path, bag, record.imu_topic, [&](const sensor_msgs::Imu& msg) {
+      ++record.imu_messages;
+      ImuConversion c = readingFromImu(msg, options.imu);
+      record.imu_problems += static_cast<int>(c.problems.size());
+      for (const auto& p : c.problems) {
+        record.warnings.push_back("'" + record.imu_topic + "' message stamped " +
+                                  stampText(msg.header.stamp) + ": " + p);
+      }
+      if (c.empty()) {
+        ++record.imu_empty;
+        return;
+      }
+      if (!aligner.add(std::move(c.reading))) ++n.readings_refused;
+      alignReady(false);
+    });
+  } catch (const BagError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw BagError(path + ": corrupt or truncated bag: " + e.what());
   }
-  record.samples =
-      alignImuRecord(record.samples, stamps, readings, options.imu_max_gap, &record.imu);
-  const ImuAlignmentCounts& n = record.imu;
+  alignReady(true);
   if (n.readings_refused > 0) {
     record.warnings.push_back(std::to_string(n.readings_refused) + " '" + record.imu_topic +
                               "' message(s) stamped at or before the previous one: not used");
@@ -275,14 +333,19 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
         ": cannot open as a ROS bag (missing, unreadable, truncated or not a bag): " + e.what());
   }
 
-  std::vector<RoadProfile::ConstPtr> road_msgs;
-  std::vector<RoadHeights::ConstPtr> heights_msgs;
-  std::vector<sensor_msgs::JointState::ConstPtr> joint_msgs;
-  std::vector<ParameterEstimate::ConstPtr> truth_msgs;
-  std::vector<sensor_msgs::Imu::ConstPtr> imu_msgs;
+  // Every message is converted as it is read; what is kept is the road's
+  // numbers, the samples (bag order, their times set once the origin is
+  // known) and the last ground truth.
+  const bool road_free = options.road_free_interval > 0.0;
+  RoadRows road;
+  std::vector<StampedSample> raw;
+  std::vector<std::string> sample_warnings;  // bag order, reported after the road's checks
+  std::size_t joint_messages = 0;
+  ros::Time first_joint;                    // the earliest joint_states stamp
+  std::optional<ros::Time> first_before_road;  // bag order: the first stamped before the road
+  std::optional<ParameterEstimate> last_truth;
   std::vector<std::string> topics;
   try {
-    const bool road_free = options.road_free_interval > 0.0;
     if (!road_free) record.road_topic = options.contacts.empty()
                             ? findTopic<RoadProfile>(path, bag, options.road_topic, &topics)
                             : findTopic<RoadHeights>(path, bag, options.road_heights_topic, &topics);
@@ -311,66 +374,85 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
     if (road_free) {
       // No road: the samples alone define the record.
     } else if (options.contacts.empty()) {
-      road_msgs = readTopic<RoadProfile>(path, bag, record.road_topic);
+      readTopic<RoadProfile>(path, bag, record.road_topic, [&](const RoadProfile& r) {
+        road.stamps.push_back(r.header.stamp);
+        road.heights.push_back(r.left);
+        road.heights.push_back(r.right);
+      });
     } else {
-      heights_msgs = readTopic<RoadHeights>(path, bag, record.road_topic);
+      std::vector<double> heights;
+      readTopic<RoadHeights>(path, bag, record.road_topic, [&](const RoadHeights& r) {
+        const std::string problem = roadHeightsInOrder(r, options.contacts, &heights);
+        if (!problem.empty()) {
+          road.problems.emplace_back(road.stamps.size(), problem);
+          heights.assign(options.contacts.size(), 0.0);
+        }
+        road.stamps.push_back(r.header.stamp);
+        road.heights.insert(road.heights.end(), heights.begin(), heights.end());
+      });
     }
-    joint_msgs = readTopic<sensor_msgs::JointState>(path, bag, record.joint_states_topic);
-    truth_msgs = readTopic<ParameterEstimate>(path, bag, truth_topic);
+    // The road's origin is its earliest stamp: a sample stamped before it is
+    // refused (the first in bag order named).
+    std::optional<ros::Time> road_origin;
+    for (const ros::Time& t : road.stamps) {
+      road_origin = road_origin ? std::min(*road_origin, t) : t;
+    }
+    readTopic<sensor_msgs::JointState>(
+        path, bag, record.joint_states_topic, [&](const sensor_msgs::JointState& js) {
+          const ros::Time& stamp = js.header.stamp;
+          first_joint = joint_messages++ == 0 ? stamp : std::min(first_joint, stamp);
+          if (road_origin && stamp < *road_origin && !first_before_road) first_before_road = stamp;
+          JointStateConversion c = measurementFromJointState(js, 0.0, options.joints);
+          for (const auto& p : c.problems) {
+            sample_warnings.push_back("sample stamped " + stampText(stamp) + ": " + p);
+          }
+          record.skipped_elements += static_cast<int>(c.problems.size());
+          if (c.empty()) {
+            ++record.empty_samples;
+            return;
+          }
+          raw.push_back({nanoseconds(stamp), stamp, std::move(c.measurement)});
+        });
+    readTopic<ParameterEstimate>(path, bag, truth_topic,
+                                 [&](const ParameterEstimate& e) { last_truth = e; });
     if (options.imu.any()) {
       record.imu_topic = findTopic<sensor_msgs::Imu>(path, bag, options.imu_topic, &topics);
-      // Bag (record) order: the order a live node receives them in.
-      imu_msgs = readTopic<sensor_msgs::Imu>(path, bag, record.imu_topic);
     }
   } catch (const BagError&) {
     throw;
   } catch (const std::exception& e) {
     throw BagError(path + ": corrupt or truncated bag: " + e.what());
   }
-  const bool road_free = options.road_free_interval > 0.0;
-  if (road_msgs.empty() && heights_msgs.empty() && !road_free) {
+  if (road.stamps.empty() && !road_free) {
     throw BagError(path + ": topic '" + record.road_topic + "' has no messages");
   }
-  if (joint_msgs.empty()) {
+  if (joint_messages == 0) {
     throw BagError(path + ": topic '" + record.joint_states_topic +
                    "' has no messages (no samples)");
   }
   if (road_free) {
-    ros::Time first = joint_msgs.front()->header.stamp;
-    for (const auto& js : joint_msgs) first = std::min(first, js->header.stamp);
     try {
-      record.origin = stampAt(first, -options.road_free_interval);
+      record.origin = stampAt(first_joint, -options.road_free_interval);
     } catch (const std::invalid_argument&) {
       record.origin = ros::Time(0, 0);  // stamps near zero (sim time): t = stamp
     }
   } else if (options.contacts.empty()) {
-    readTwoContactRoad(path, record, road_msgs);
+    readTwoContactRoad(path, record, road);
   } else {
-    readContactRoad(path, record, heights_msgs, options.contacts);
+    readContactRoad(path, record, road, options.contacts);
   }
+  road = RoadRows();
 
   // Samples: by header stamp, relative to the road's origin.
-  std::vector<StampedSample> raw;
-  for (const auto& js : joint_msgs) {
-    const ros::Time& stamp = js->header.stamp;
-    if (stamp < record.origin) {
-      throw BagError(path + ": a '" + record.joint_states_topic + "' message is stamped " +
-                     stampText(stamp) + ", " + std::to_string(-secondsSince(stamp, record.origin)) +
-                     " s before the first '" + record.road_topic + "' message (" +
-                     stampText(record.origin) + ", the time origin t = 0)");
-    }
-    JointStateConversion c =
-        measurementFromJointState(*js, secondsSince(stamp, record.origin), options.joints);
-    for (const auto& p : c.problems) {
-      record.warnings.push_back("sample stamped " + stampText(stamp) + ": " + p);
-    }
-    record.skipped_elements += static_cast<int>(c.problems.size());
-    if (c.empty()) {
-      ++record.empty_samples;
-      continue;
-    }
-    raw.push_back({nanoseconds(stamp), stamp, std::move(c.measurement)});
+  if (first_before_road) {
+    const ros::Time& stamp = *first_before_road;
+    throw BagError(path + ": a '" + record.joint_states_topic + "' message is stamped " +
+                   stampText(stamp) + ", " + std::to_string(-secondsSince(stamp, record.origin)) +
+                   " s before the first '" + record.road_topic + "' message (" +
+                   stampText(record.origin) + ", the time origin t = 0)");
   }
+  for (StampedSample& s : raw) s.m.time = secondsSince(s.stamp, record.origin);
+  record.warnings.insert(record.warnings.end(), sample_warnings.begin(), sample_warnings.end());
   if (record.empty_samples > 0) {
     record.warnings.push_back(std::to_string(record.empty_samples) +
                               " joint_states message(s) observed no suspension channel; skipped");
@@ -384,8 +466,9 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   }
   std::vector<std::int64_t> stamps;
   record.samples = mergeEqualStamps(path, raw, options.joints.channelCount(), &stamps);
-  if (options.imu.any()) alignBagImu(path, options, imu_msgs, stamps, record);
-  if (!truth_msgs.empty()) record.ground_truth = *truth_msgs.back();
+  std::vector<StampedSample>().swap(raw);
+  if (options.imu.any()) alignBagImu(path, bag, options, stamps, record);
+  record.ground_truth = std::move(last_truth);
   return record;
 }
 

@@ -526,6 +526,8 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   estimate_pub_.publish(e.estimate);
   if (e.pdf && pdf_worker_) pdf_worker_->submit(std::move(*e.pdf));
   timeline_.keepRoadFrom(run_->oldestTime());
+  // Road-free: the inputs no filter or batch reads again go (flat memory over hours).
+  if (road_free_) road_free_->forgetInputs(run_->oldestTime(), run_->batchUntil());
 
   ++counters.samples_processed;
   counters.non_finite_updates += e.non_finite + e.coherence_non_finite;

@@ -1,6 +1,7 @@
 #include "pc_ekf/ros/estimator_run.h"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "pc_ekf/filter/batch_update.h"
@@ -133,6 +134,13 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
     out.pdf = PdfRequest{r.coefficients, static_cast<std::uint32_t>(r.index), stamp};
   }
   return out;
+}
+
+double EstimatorRun::batchUntil() const {
+  if (batch_series_.size() < static_cast<std::size_t>(config_.node.max_batch_samples)) {
+    return std::numeric_limits<double>::infinity();
+  }
+  return batch_series_.back().time;
 }
 
 void EstimatorRun::saveTo(CheckpointSnapshot& s) const {

@@ -62,6 +62,9 @@ class EstimatorRun {
   // by the one-step filters).
   double oldestTime() const;
   std::size_t batchSamples() const { return batch_series_.size(); }
+  // The last sample time batch() reads: infinity while the batch still
+  // keeps every sample (the road-free inputs up to it must stay).
+  double batchUntil() const;
   // Deferred re-run of the full filter: swap after this sample (0 = none).
   int pendingSwap() const { return pending_swap_; }
   int lateSwaps() const { return full_.lateSwaps(); }

@@ -2,6 +2,7 @@
 // master needed. One JSON object on stdout; logs on stderr; exit 2 on bad input.
 #include <cstdlib>
 #include <iostream>
+#include <memory>
 #include <string>
 
 #include "pc_ekf/io/config_identity.h"
@@ -49,21 +50,34 @@ int main(int argc, char** argv) {
     std::uint64_t seed = config.truth.seed;
     int status = 0;
     if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
+    // Road-free one-step splits the readings as the filter goes (memory:
+    // the readings); the other methods, the sensitivity and
+    // tolerances_prune need the whole split first.
+    const bool stream_road_free = config.road.source == RoadSource::kNone &&
+                                  method == EstimationMethod::kOneStep &&
+                                  !args.has("--sensitivity") && !(config.tolerances_prune > 0.0);
     const RecordInput record =
         loadRecord(config, args.has("--bag") ? args["--bag"] : "",
-                   args.has("--measurements") ? args["--measurements"] : "", seed);
+                   args.has("--measurements") ? args["--measurements"] : "", seed,
+                   !stream_road_free);
     const auto& model = record.model;
     const MeasurementSeries& series = record.series;
     PriorSensitivity sensitivity;
     std::vector<std::string> pruned;
     config = sensitivityAndPrune(config, record, args.has("--sensitivity"), &sensitivity, &pruned);
     const auto progress = [](const std::string& msg) { std::cerr << "[progress] " << msg << "\n"; };
-    OfflineResult result = runOfflineEstimation(config, series, model, method, seed, progress);
+    // --out: the rows are written as the run makes them (none is kept).
+    std::unique_ptr<OfflineOutputs> out;
+    if (args.has("--out")) out = std::make_unique<OfflineOutputs>(args["--out"]);
+    OfflineResult result =
+        stream_road_free ? runRoadFreeOneStep(config, series, out.get())
+                         : runOfflineEstimation(config, series, model, method, seed, progress,
+                                                nullptr, out.get());
     result.warnings.insert(result.warnings.begin(), record.warnings.begin(), record.warnings.end());
     if (args.has("--sensitivity")) result.sensitivity = sensitivity;
     result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;
-    if (args.has("--out")) writeOfflineOutputs(result, args["--out"]);
+    if (out) out->finish(result);
     return 0;
   });
 }

@@ -17,7 +17,7 @@
 namespace pc_ekf {
 
 struct RecordInput {
-  std::shared_ptr<const MechanicalModel> model;
+  std::shared_ptr<const MechanicalModel> model;  // null: road-free readings not split
   MeasurementSeries series;
   // About the record as read (also on stderr): road-free samples dropped
   // before every input had been read.
@@ -26,9 +26,12 @@ struct RecordInput {
 
 // `bag` and `csv` are paths ("" when not given; at most one of them).
 // With road.source none the model is the road-free one built from the
-// record (RoadFreeStream), the series its outputs.
+// record (RoadFreeStream), the series its outputs; with `split_road_free`
+// false the series stays the readings and the model null
+// (runRoadFreeOneStep splits them as it goes).
 inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& bag,
-                              const std::string& csv, std::uint64_t seed) {
+                              const std::string& csv, std::uint64_t seed,
+                              bool split_road_free = true) {
   RecordInput r;
   std::shared_ptr<const ContactRoad> bag_road;
   if (!bag.empty()) {
@@ -61,7 +64,7 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   if (!zero.empty()) {
     throw ConfigError((bag.empty() ? csv : bag) + ": " + zero);
   }
-  if (road_free) {
+  if (road_free && split_road_free) {
     RoadFreeRecord split = roadFreeRecord(config, r.series);
     r.model = split.model;
     r.series = std::move(split.outputs);
@@ -69,6 +72,16 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
       const std::string& name = !bag.empty() ? bag : !csv.empty() ? csv : config.source;
       std::cerr << "[road-free] " << name << ": " << split.warning << "\n";
       r.warnings.push_back(split.warning);
+    }
+  } else if (road_free) {
+    // A sample the stream refuses: refused now; the leading samples before
+    // every input has been read dropped as roadFreeRecord drops them.
+    const RoadFreeCheck check = checkRoadFreeRecord(config, r.series);
+    if (check.dropped > 0) {
+      r.series.erase(r.series.begin(), r.series.begin() + static_cast<std::ptrdiff_t>(check.dropped));
+      const std::string& name = !bag.empty() ? bag : !csv.empty() ? csv : config.source;
+      std::cerr << "[road-free] " << name << ": " << check.warning << "\n";
+      r.warnings.push_back(check.warning);
     }
   }
   return r;

@@ -97,7 +97,14 @@ int main(int argc, char** argv) {
         EstimatorConfig c = config;
         c.update = run.rule;
         if (run.enkf_members > 0) c.enkf.members = run.enkf_members;
-        const OfflineResult r = runOfflineEstimation(c, data, model, run.method, seed, {}, cache.get());
+        // The first seed's rows go to --per-sample-dir as they are made.
+        std::unique_ptr<OfflineOutputs> per_sample;
+        if (a.count("--per-sample-dir") && seed == first) {
+          per_sample = std::make_unique<OfflineOutputs>(a["--per-sample-dir"] + "/" +
+                                                        a["--dataset"] + "/" + label);
+        }
+        const OfflineResult r = runOfflineEstimation(c, data, model, run.method, seed, {},
+                                                     cache.get(), per_sample.get());
         std::string json = toJson(r);
         while (!json.empty() && json.back() == '\n') json.pop_back();
         for (auto& ch : json) if (ch == '\n') ch = ' ';
@@ -105,9 +112,7 @@ int main(int argc, char** argv) {
                   << config.sampling.samples << ", \"seed\": " << seed << ", \"label\": \"" << label
                   << "\", \"members\": " << c.enkf.members << ", \"result\": " << json << "}"
                   << std::endl;
-        if (a.count("--per-sample-dir") && seed == first) {
-          writeOfflineOutputs(r, a["--per-sample-dir"] + "/" + a["--dataset"] + "/" + label);
-        }
+        if (per_sample) per_sample->finish(r);
       }
       std::cerr << "[progress] " << a["--dataset"] << " seed " << seed << " done\n";
     }

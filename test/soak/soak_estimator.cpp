@@ -2,8 +2,13 @@
 // same EstimatorTimeline (road buffer, pending samples) and EstimatorRun
 // (one-step + coherence filters, batch buffer, PDFs) the node drives, fed a
 // streamed truth simulation and its road at 1 kHz for --samples samples.
+// Road-free configs (road.source none): the truth drives truth.road, the
+// samples go through the node's RoadFreeStream, whose inputs are forgotten
+// behind the filters and the batch as the node does.
 // Prints RSS every --report samples; exit 1 when a sample is dropped or RSS
-// grows by more than --limit-mb after --warmup samples (soak.sh).
+// grows by more than --limit-mb after --warmup samples (soak.sh). --batch 1:
+// at the end ~estimate_batch's batch over the kept samples (exit 1 when it
+// publishes nothing), which road-free reads from the inputs kept for it.
 #include <Eigen/Dense>
 
 #include <chrono>
@@ -16,6 +21,7 @@
 #include <string>
 
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/pc/pdf_sampler.h"
 #include "pc_ekf/ros/estimator_run.h"
@@ -41,7 +47,7 @@ struct Options {
   std::string config;
   long samples = 1000000, warmup = 200000, report = 100000;
   double dt = 0.001, limit_mb = 20.0;
-  int pdf_every = 1000, max_batch = 100000, max_road = 100000;
+  int pdf_every = 1000, max_batch = 100000, max_road = 100000, batch = 0;
 };
 
 Options parse(int argc, char** argv) {
@@ -58,6 +64,7 @@ Options parse(int argc, char** argv) {
     else if (k == "--pdf-every") o.pdf_every = std::stoi(v);
     else if (k == "--max-batch") o.max_batch = std::stoi(v);
     else if (k == "--max-road") o.max_road = std::stoi(v);
+    else if (k == "--batch") o.batch = std::stoi(v);
     else throw std::invalid_argument("unknown option '" + k + "'");
   }
   if (o.config.empty()) throw std::invalid_argument("--config FILE is required");
@@ -73,9 +80,14 @@ int run(const Options& o) {
   c.node.max_road_samples = o.max_road;
   c.node.pdf_every = o.pdf_every;
 
-  // The truth: one point of the model on the analytic road, streamed.
-  const auto analytic_road = std::dynamic_pointer_cast<const RoadInput>(makeRoad(c));
-  const auto truth_model = makeModel(c, analytic_road);
+  // The truth: one point of the model on the analytic road (road-free: on
+  // truth.road, which the estimator does not know), streamed.
+  const bool road_free = c.road.source == RoadSource::kNone;
+  const auto analytic_road =
+      road_free ? nullptr : std::dynamic_pointer_cast<const RoadInput>(makeRoad(c));
+  const auto truth_model = road_free ? truthOnItsRoad(c) : makeModel(c, analytic_road);
+  const auto stream =
+      road_free ? std::make_unique<RoadFreeStream>(c, RoadFreeStream::inputsFor(c)) : nullptr;
   const auto truth_batch = truth_model->prepare(truthParameters(c, *truth_model));
   Eigen::ArrayXXd y = truth_batch->initialState();
   const std::vector<int> channels = channelIndices(c);
@@ -85,7 +97,8 @@ int run(const Options& o) {
   TimelineSettings ts = timelineSettings(c);
   ts.analytic_interval = o.dt;
   EstimatorTimeline timeline(ts);
-  const auto prior = makePropagator(c, makeModel(c, std::make_shared<SampledRoad>(2)));
+  const auto prior = makePropagator(
+      c, road_free ? stream->model() : makeModel(c, std::make_shared<SampledRoad>(2)));
   const auto pdfs = makePdfSampler(c, prior->basis(), prior->parameterCount());
   std::unique_ptr<EstimatorRun> run;
 
@@ -94,10 +107,12 @@ int run(const Options& o) {
   std::string last_warning;  // of the last unhealthy estimate
   double rss_warm = NAN, rss_max_after = 0.0;
   const double start = seconds();
-  std::printf("%10s %10s %10s %10s %10s %8s\n", "samples", "rss_mb", "road_buf", "batch_buf",
-              "unhealthy", "wall_s");
-  const Eigen::Vector2d road0 = analytic_road->height(0.0);
-  timeline.addRoad(origin, road0[0], road0[1], seconds());  // t = 0: the origin
+  std::printf("%10s %10s %10s %10s %10s %10s %8s\n", "samples", "rss_mb", "road_buf", "inputs",
+              "batch_buf", "unhealthy", "wall_s");
+  if (!road_free) {
+    const Eigen::Vector2d road0 = analytic_road->height(0.0);
+    timeline.addRoad(origin, road0[0], road0[1], seconds());  // t = 0: the origin
+  }
   for (long k = 1; k <= o.samples; ++k) {
     const double t = static_cast<double>(k) * o.dt, t_prev = static_cast<double>(k - 1) * o.dt;
     integrate(*truth_model, *truth_batch, t_prev, t, y, c.integration);
@@ -111,19 +126,28 @@ int run(const Options& o) {
       m.values[static_cast<Eigen::Index>(i)] = v + sd * normal(rng);
     }
     const ros::Time stamp = origin + ros::Duration(t);
-    const Eigen::Vector2d road = analytic_road->height(t);
     const double now = seconds();
-    if (timeline.addRoad(stamp, road[0], road[1], now) != StampVerdict::kAccepted) ++dropped;
+    if (!road_free) {
+      const Eigen::Vector2d road = analytic_road->height(t);
+      if (timeline.addRoad(stamp, road[0], road[1], now) != StampVerdict::kAccepted) ++dropped;
+    }
     if (timeline.addSample(stamp, m, now) != StampVerdict::kAccepted) ++dropped;
     DroppedSamples lost;
     for (const ReleasedSample& s : timeline.release(now, &lost)) {
-      if (!run)
-        run = std::make_unique<EstimatorRun>(c, makePropagator(c, makeModel(c, timeline.road())),
-                                             true);
-      const SampleEstimate e = run->process(s.measurement, s.stamp);
+      if (!run) {
+        run = std::make_unique<EstimatorRun>(
+            c, road_free ? prior : makePropagator(c, makeModel(c, timeline.road())), true);
+      }
+      Measurement outputs;
+      if (stream && !stream->add(s.measurement, &outputs).empty()) {
+        ++dropped;
+        continue;
+      }
+      const SampleEstimate e = run->process(stream ? outputs : s.measurement, s.stamp);
       // The node draws these on its PDF worker; here inline (same numbers).
       if (e.pdf) parameterPdf(*pdfs, prior->mapping().names(), *e.pdf);
       timeline.keepRoadFrom(run->oldestTime());
+      if (stream) stream->forgetInputs(run->oldestTime(), run->batchUntil());
       ++processed;
       unhealthy += !e.estimate.healthy;
       if (!e.estimate.healthy && !e.estimate.warnings.empty()) last_warning = e.estimate.warnings.front();
@@ -133,7 +157,8 @@ int run(const Options& o) {
     if (k == o.warmup) rss_warm = rssMb();
     if (k > o.warmup) rss_max_after = std::max(rss_max_after, rssMb());
     if (k % o.report == 0 || k == o.samples) {
-      std::printf("%10ld %10.1f %10zu %10zu %10ld %8.1f\n", k, rssMb(), timeline.roadCount(),
+      std::printf("%10ld %10.1f %10zu %10zu %10zu %10ld %8.1f\n", k, rssMb(),
+                  timeline.roadCount(), stream ? stream->inputs().held() : 0,
                   run ? run->batchSamples() : 0, unhealthy, seconds() - start);
       std::fflush(stdout);
     }
@@ -144,7 +169,13 @@ int run(const Options& o) {
               processed, o.samples, dropped, o.warmup, rss_warm, rss_max_after, growth,
               o.limit_mb, static_cast<double>(processed) / (seconds() - start));
   if (!last_warning.empty()) std::printf("last health warning: %s\n", last_warning.c_str());
-  return (dropped == 0 && processed == o.samples && growth < o.limit_mb) ? 0 : 1;
+  bool batch_ok = true;
+  if (o.batch && run) {
+    const BatchEstimate b = run->batch(timeline.roadHistoryComplete());
+    std::printf("batch: %s\n", b.summary.c_str());
+    batch_ok = b.ok;
+  }
+  return (dropped == 0 && processed == o.samples && growth < o.limit_mb && batch_ok) ? 0 : 1;
 }
 
 }  // namespace

@@ -24,6 +24,8 @@ YAML::Node vehicleImu(double duration, const std::string& zero) {
   root["sampling"]["samples"] = static_cast<int>(200 * duration);
   root["sampling"]["duration"] = duration;
   root["filter"]["linearization"] = "mean";
+  // The load's re-open needs tare; the constant-load drives need none.
+  root["filter"]["reopen"]["mode"] = "off";
   return root;
 }
 

@@ -85,12 +85,13 @@ TEST(OfflineJson, EstimateReadsBackAsTheComputedDouble) {
   EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml");
   const auto model = makeModel(c, makeRoad(c));
   const MeasurementSeries data = synthesizeFromConfig(c, *model, c.truth.seed);
-  const OfflineResult r = runOfflineEstimation(c, data, model, EstimationMethod::kOneStep, 1);
-
   const std::string dir = (std::filesystem::temp_directory_path() /
                            ("pc_ekf_json_" + std::to_string(::getpid())) / "a" / "b")
                               .string();
-  writeOfflineOutputs(r, dir);  // parents created
+  OfflineOutputs out(dir);  // parents created
+  const OfflineResult r =
+      runOfflineEstimation(c, data, model, EstimationMethod::kOneStep, 1, {}, nullptr, &out);
+  out.finish(r);
   std::ifstream in(dir + "/result.json");
   const nlohmann::json j = nlohmann::json::parse(in);
   ASSERT_EQ(j["parameters"].size(), r.parameters.size());
@@ -127,7 +128,7 @@ TEST(OfflineJson, UncreatableDirectoryIsNamed) {
                                .string();
   std::ofstream(file) << "a file, not a directory\n";
   try {
-    writeOfflineOutputs(trickyResult(), file + "/out");
+    OfflineOutputs out(file + "/out");
     ADD_FAILURE() << "no error";
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(file + "/out: cannot create the output directory"),

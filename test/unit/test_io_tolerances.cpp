@@ -273,9 +273,9 @@ TEST(BatchDesign, EsMdaOnItsOwnDesignOneStepOnTheSparseBasis) {
     EXPECT_EQ(ea.parameters[i].mean, eb.parameters[i].mean) << ea.parameters[i].name;
     EXPECT_EQ(ea.parameters[i].stddev, eb.parameters[i].stddev) << ea.parameters[i].name;
   }
-  EXPECT_EQ(ea.records.back().coefficients.cols(), 136);
+  EXPECT_EQ(ea.last_record.coefficients.cols(), 136);
   const OfflineResult oa = runOfflineEstimation(a, data, model, EstimationMethod::kOneStep, 3);
-  EXPECT_EQ(oa.records.back().coefficients.cols(), 58);
+  EXPECT_EQ(oa.last_record.coefficients.cols(), 58);
 }
 
 TEST(BatchDesign, TooFewBatchPointsAreRefusedByName) {

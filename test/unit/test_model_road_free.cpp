@@ -4,9 +4,12 @@
 // readings on the same drive.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "pc_ekf/model/full_car_road_free.h"
 #include "pc_ekf/model/input_noise.h"
@@ -251,6 +254,83 @@ TEST(ReadingInputs, AStreamIsTheWholeRecord) {
   const double inf[2] = {1.0, INFINITY};
   EXPECT_NE(fresh.append(0.1, inf).find("'gyro_x' not finite"), std::string::npos);
   EXPECT_TRUE(fresh.empty());
+}
+
+// A stream that forgets what no reader needs (the node over hours, and
+// estimate_offline's road-free one-step) holds a bounded tail and the
+// record's first samples that a batch reads, and reads there exactly as the
+// whole record does; its integrals and sample sums run on over the
+// forgotten samples; a read that would need a forgotten sample throws.
+TEST(ReadingInputs, AForgettingStreamReadsAsTheWholeRecord) {
+  const int n = 20000;
+  std::vector<double> times;
+  std::vector<std::vector<double>> in(2);
+  for (int k = 1; k <= n; ++k) {
+    times.push_back(0.005 * k + 0.001 * (k % 3));
+    in[0].push_back(std::sin(0.01 * k) - 0.5 * (k % 7 == 0));
+    in[1].push_back(0.02 * std::cos(0.003 * k));
+  }
+  const std::vector<std::string> names{"u1", "gyro_x"};
+  const ReadingInputs whole(names, times, in);
+  ReadingInputs stream(names);
+  const auto force = [](const double* x) { return 3.0 * x[0] + x[0] * x[0] * x[0] - x[1]; };
+  const int sum = stream.addSampleSum(force);
+  const double batch_end = times[99];  // a batch over the first 100 samples
+  const double window = 0.5;          // s: what the filters still read
+  std::size_t most = 0;
+  for (int k = 0; k < n; ++k) {
+    const double row[2] = {in[0][k], in[1][k]};
+    ASSERT_EQ(stream.append(times[k], row), "");
+    stream.forget(times[k] - window, batch_end);
+    most = std::max(most, stream.held());
+  }
+  EXPECT_EQ(stream.samples(), static_cast<std::size_t>(n));
+  // 100 first samples, a window of ~100, forgotten in chunks of 4096.
+  EXPECT_LT(most, 100u + 2u * 4096u + 300u);
+  EXPECT_LT(stream.held(), static_cast<std::size_t>(n) / 2);
+  const double kept_from = times[n - 1] - window;
+  std::vector<double> probes{0.0, 0.002, times[0], 0.5 * (times[40] + times[41]), times[99]};
+  for (int k = n - 90; k < n; k += 7) {
+    probes.push_back(times[k]);
+    probes.push_back(times[k] + 0.001);
+  }
+  probes.push_back(times[n - 1] + 0.3);
+  for (double t : probes) {
+    SCOPED_TRACE(t);
+    double a[2], b[2];
+    whole.at(t, a);
+    stream.at(t, b);
+    EXPECT_EQ(a[0], b[0]);
+    EXPECT_EQ(a[1], b[1]);
+    EXPECT_EQ(whole.integral(1, t), stream.integral(1, t));
+    if (t > kept_from || t <= times[99]) {
+      EXPECT_EQ(whole.previousTime(t), stream.previousTime(t));
+    }
+  }
+  EXPECT_EQ(stream.time(n - 1), times[n - 1]);
+  EXPECT_EQ(stream.time(50), times[50]);
+  // Between the batch's samples and the tail: forgotten.
+  const double gap = times[n / 2];
+  double out[2];
+  EXPECT_THROW(stream.at(gap, out), std::logic_error);
+  EXPECT_THROW(stream.integral(1, gap), std::logic_error);
+  EXPECT_THROW(stream.previousTime(gap), std::logic_error);
+  EXPECT_THROW(stream.time(n / 2), std::out_of_range);
+  EXPECT_THROW(stream.addSampleSum(force), std::logic_error);
+  // The sum over every sample, in order: as the whole record's.
+  EXPECT_EQ(stream.sampleSum(sum), whole.sampleSum(whole.addSampleSum(force)));
+
+  // Nothing kept at the start: the front itself is forgotten.
+  ReadingInputs tail(names);
+  for (int k = 0; k < n; ++k) {
+    const double row[2] = {in[0][k], in[1][k]};
+    ASSERT_EQ(tail.append(times[k], row), "");
+    tail.forget(times[k], -INFINITY);
+  }
+  EXPECT_LT(tail.held(), 2u * 4096u + 2u);
+  EXPECT_THROW(tail.at(times[0], out), std::logic_error);
+  EXPECT_EQ(tail.integral(1, times[n - 1]), whole.integral(1, times[n - 1]));
+  EXPECT_EQ(tail.previousTime(times[n - 1]), times[n - 2]);
 }
 
 // Errors in variables: the variance an output inherits from noisy inputs,

@@ -1,0 +1,45 @@
+#include "pc_ekf/io/offline_parts.h"
+
+#include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/pc/in_parts.h"
+
+namespace pc_ekf {
+namespace offline {
+
+void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eigen::VectorXd& sd,
+               OfflineResult* r) {
+  r->parameters.clear();
+  for (std::size_t i = 0; i < c.uncertain.size(); ++i) {
+    const UncertainParameter& u = c.uncertain[i];
+    const double scale = u.nominal * u.relative_range;
+    r->parameters.push_back({u.name, mean[i], sd[i], (mean[i] - u.nominal) / scale, sd[i] / scale});
+  }
+}
+
+PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis) {
+  return std::async(std::launch::async, [&c, basis = std::move(basis)] {
+    return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()), machineThreads());
+  });
+}
+
+std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs) {
+  const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
+  if (!coeffs.allFinite()) return {};
+  return s->histograms(coeffs, machineThreads());
+}
+
+void give(SampleRecord record, SampleSink* sink, OfflineResult* r) {
+  if (sink) sink->add(record);
+  r->last_record = std::move(record);
+}
+
+SampleColumns columnsOf(const EstimatorConfig& c, const std::vector<std::string>& loo_channels) {
+  SampleColumns columns;
+  for (const UncertainParameter& u : c.uncertain) columns.parameters.push_back(u.name);
+  columns.loo_channels = loo_channels;
+  return columns;
+}
+
+}  // namespace offline
+
+}  // namespace pc_ekf

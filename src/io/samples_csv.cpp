@@ -1,0 +1,149 @@
+#include "pc_ekf/io/samples_csv.h"
+
+#include <stdexcept>
+#include <utility>
+
+#include "pc_ekf/io/number_text.h"
+
+namespace pc_ekf {
+namespace {
+
+// One row (appendG17: the stream's %.17g digits).
+void appendSampleRow(std::string& text, const SampleRecord& s, std::size_t loo_channels,
+                     int terms) {
+  text += std::to_string(s.index);
+  text += ',';
+  appendG17(text, s.time);
+  for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
+    text += ',';
+    appendG17(text, s.mean[i]);
+    text += ',';
+    appendG17(text, s.stddev[i]);
+    for (int j = 0; j < terms; ++j) {
+      text += ',';
+      appendG17(text, s.coefficients(i, j));
+    }
+  }
+  text += ',';
+  appendG17(text, s.nis);
+  for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) text += flag ? ",1" : ",0";
+  // Empty cells: no leave-one-out error for this sample (a point left out).
+  for (std::size_t i = 0; i < loo_channels; ++i) {
+    text += ',';
+    if (static_cast<std::size_t>(s.loo_error.size()) == loo_channels) {
+      appendG17(text, s.loo_error[i]);
+    }
+  }
+  text += '\n';
+}
+
+}  // namespace
+
+SamplesCsv::SamplesCsv(const std::string& path) : path_(path), out_(path) {
+  if (!out_) throw std::runtime_error(path + ": cannot write");
+  thread_ = std::thread([this] { loop(); });
+}
+
+SamplesCsv::~SamplesCsv() {
+  if (!open_.empty()) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    waiting_.push_back(std::move(open_));
+  }
+  stop();
+}
+
+void SamplesCsv::begin(const SampleColumns& columns) {
+  columns_ = columns;
+  begun_ = true;
+}
+
+void SamplesCsv::add(const SampleRecord& record) {
+  open_.push_back(record);
+  if (open_.size() < kBlockRows) return;
+  hand(std::move(open_));
+  open_.clear();
+  open_.reserve(kBlockRows);
+}
+
+void SamplesCsv::hand(Block block) {
+  {
+    std::unique_lock<std::mutex> lock(mutex_);
+    room_.wait(lock, [this] { return waiting_.size() < kBlocksWaiting || !error_.empty(); });
+    if (!error_.empty()) throw std::runtime_error(error_);
+    waiting_.push_back(std::move(block));
+  }
+  wake_.notify_one();
+}
+
+void SamplesCsv::loop() {
+  for (;;) {
+    Block block;
+    {
+      std::unique_lock<std::mutex> lock(mutex_);
+      wake_.wait(lock, [this] { return stopping_ || !waiting_.empty(); });
+      if (waiting_.empty()) return;  // stopping, and every block written
+      block = std::move(waiting_.front());
+      waiting_.pop_front();
+    }
+    room_.notify_one();
+    write(block);
+  }
+}
+
+void SamplesCsv::write(const Block& block) {
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (!error_.empty()) return;
+  }
+  // The first record's coefficient count names the columns of every row.
+  if (!header_) writeHeader(static_cast<int>(block.front().coefficients.cols()));
+  text_.clear();
+  for (const SampleRecord& r : block) {
+    appendSampleRow(text_, r, columns_.loo_channels.size(), terms_);
+  }
+  out_.write(text_.data(), static_cast<std::streamsize>(text_.size()));
+  if (!out_) {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      error_ = path_ + ": writing failed";
+    }
+    room_.notify_one();  // a caller waiting for room throws
+  }
+}
+
+void SamplesCsv::writeHeader(int terms) {
+  std::string text = "index,t";
+  for (const std::string& p : columns_.parameters) {
+    text += ',' + p + "_mean," + p + "_stddev";
+    for (int j = 0; j < terms; ++j) text += ',' + p + "_c" + std::to_string(j);
+  }
+  text += ",nis,nis_window_outside,band_nested,healthy";
+  for (const std::string& channel : columns_.loo_channels) text += ",loo_" + channel;
+  text += '\n';
+  out_.write(text.data(), static_cast<std::streamsize>(text.size()));
+  terms_ = terms;
+  header_ = true;
+}
+
+void SamplesCsv::stop() {
+  if (!thread_.joinable()) return;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_one();
+  thread_.join();
+}
+
+void SamplesCsv::close(const SampleColumns& columns) {
+  if (!open_.empty()) hand(std::move(open_));
+  open_.clear();
+  if (!begun_) columns_ = columns;
+  stop();
+  if (!error_.empty()) throw std::runtime_error(error_);
+  if (!header_) writeHeader(0);
+  out_.close();
+  if (!out_) throw std::runtime_error(path_ + ": writing failed");
+}
+
+}  // namespace pc_ekf
