@@ -89,6 +89,7 @@ void MovingHorizon::reset() {
   previous_time_ = 0.0;
   recent_.clear();
   anchor_rows_.clear();
+  rate_weight_ = rate_mean_ = rate_square_ = rate_noise_ = 0.0;
   startWindow();
 }
 
@@ -178,9 +179,8 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
     jacobian->col(offset_).setZero();
     if (dt > 0.0) {
       // The rate at t by the second-order backward difference (no lag of
-      // half a sample) over points two samples apart: the inputs' noise in
-      // a one-sample difference dilutes the slope (measured: 0.71 of a 5 ms
-      // offset found; two samples 0.79; noise-free data 0.91).
+      // half a sample) over points two samples apart (less of the inputs'
+      // noise than one sample apart).
       Eigen::ArrayXXd before, earlier;
       constexpr double kb = 2.0;  // samples between the difference's points
       if (!readingsAt(th.col(0), m.time - kb * dt, before)) return false;
@@ -195,7 +195,33 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
       const double s0 = force(y, &ay, &az);
       const double s1 = force(before, &unused_y, &unused_z);
       const double s2 = force(earlier, &unused_y, &unused_z);
-      const double rate = (3.0 * s0 - 4.0 * s1 + s2) / (2.0 * kb * dt);  // of the specific force
+      const double observed = (3.0 * s0 - 4.0 * s1 + s2) / (2.0 * kb * dt);  // of the specific force
+      // The rate carries the inputs' noise, which would dilute the slope
+      // (errors in variables): regression calibration uses its best linear
+      // predictor mean + lambda (observed - mean), lambda = 1 - noise / spread,
+      // the noise from the inherited variance of accel_z (the differences'
+      // weights 3, -4, 1 over 2 kb dt), mean and spread over about 10 s.
+      double noise = 0.0;
+      for (int r = 0; r < c; ++r) {
+        if (m.channels[static_cast<std::size_t>(r)] == accel_z_ && m.extra_covariance.rows() > r) {
+          noise = m.extra_covariance(r, r) * 26.0 / std::pow(2.0 * kb * dt, 2);
+        }
+      }
+      if (learn_rate_) {
+        const double a = std::min(1.0, dt / 10.0);
+        rate_weight_ = (1.0 - a) * rate_weight_ + a;
+        rate_mean_ = (1.0 - a) * rate_mean_ + a * observed;
+        rate_square_ = (1.0 - a) * rate_square_ + a * observed * observed;
+        rate_noise_ = (1.0 - a) * rate_noise_ + a * noise;
+      }
+      double rate = observed;
+      if (rate_weight_ > 0.0) {
+        const double mean = rate_mean_ / rate_weight_;
+        const double spread = rate_square_ / rate_weight_ - mean * mean;
+        const double lambda =
+            spread > 0.0 ? std::clamp(1.0 - rate_noise_ / rate_weight_ / spread, 0.05, 1.0) : 1.0;
+        rate = mean + lambda * (observed - mean);
+      }
       for (int r = 0; r < c; ++r) {
         const int ch = m.channels[static_cast<std::size_t>(r)];
         if (ch == accel_y_) (*jacobian)(r, offset_) = -settings_.clock_offset * rate * ay / s0;
@@ -255,6 +281,7 @@ HorizonStep MovingHorizon::propose(const Measurement& m, const NoiseModel& noise
   // from where it was linearised (a wide prior, a load just re-opened), the
   // sample is linearised again at that posterior mean, from the same prior.
   at_ = mean_;
+  learn_rate_ = true;  // the offset's rate moments: once per new sample
   for (int pass = 0;; ++pass) {
     Eigen::VectorXd values, z0, r;
     Eigen::MatrixXd j;
@@ -262,7 +289,9 @@ HorizonStep MovingHorizon::propose(const Measurement& m, const NoiseModel& noise
     *cov = cov_;
     // The offset's slope needs four samples before this one.
     const double dt = previous_time_ > 3.0 * (m.time - previous_time_) ? m.time - previous_time_ : 0.0;
-    if (!predict(m, dt, noise, at_, &values, &z0, &j, &r)) {
+    const bool ok = predict(m, dt, noise, at_, &values, &z0, &j, &r);
+    learn_rate_ = false;
+    if (!ok) {
       s.update = UpdateDiagnostics();
       s.update.finite = false;
       return s;

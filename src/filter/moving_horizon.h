@@ -160,6 +160,9 @@ class MovingHorizon {
   double previous_time_ = 0.0;
   int last() const { return parameters_; }  // the angle's row
   int offset_ = -1;  // the clock offset's row (units of settings_.clock_offset); -1: none
+  // The offset slope's rate: exponentially weighted moments (predict).
+  bool learn_rate_ = false;
+  double rate_weight_ = 0.0, rate_mean_ = 0.0, rate_square_ = 0.0, rate_noise_ = 0.0;
   void walk(Eigen::MatrixXd& cov, double dt) const;  // the last sample's (window re-runs)
   MovingHorizonSettings settings_;
   Eigen::VectorXd prior_mean_, prior_std_, lower_, upper_;

@@ -108,6 +108,27 @@ TEST(MovingHorizon, ReopenModeLoadNeedsTare) {
   }
 }
 
+// The IMU read 2 ms before its stamps (truth.timing.imu_clock_offset): the
+// offset state finds most of it (the rate that carries it is noisy), finds
+// next to nothing without one, and is reported only when configured.
+TEST(MovingHorizon, AClockOffsetIsEstimated) {
+  for (const double offset : {0.0, 0.002}) {
+    YAML::Node root = vehicleImu(30.0, "tare");
+    root["truth"]["timing"]["imu_clock_offset"] = offset;
+    root["filter"]["horizon"]["clock_offset"] = 0.005;
+    const OfflineResult r = estimate(root, 4);
+    ASSERT_TRUE(std::isfinite(r.clock_offset));
+    EXPECT_LT(r.clock_offset_std, 1e-4);
+    if (offset == 0.0) {
+      EXPECT_LT(std::abs(r.clock_offset), 5e-4) << r.clock_offset;
+    } else {
+      EXPECT_GT(r.clock_offset, 0.5 * offset) << r.clock_offset;
+      EXPECT_LT(r.clock_offset, 1.25 * offset) << r.clock_offset;
+    }
+  }
+  EXPECT_TRUE(std::isnan(estimate(vehicleImu(2.0, "tare"), 4).clock_offset));
+}
+
 TEST(MovingHorizon, AVehicleTheDataDoNotFollowIsFlagged) {
   YAML::Node root = vehicleImu(20.0, "tare");
   root["truth"]["vehicle"]["spring_linear_left"] = 19357.2 * 1.3;  // beyond its 10 %
