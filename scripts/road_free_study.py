@@ -18,7 +18,7 @@ for one vehicle (the paper's, or nine values off by up to 6 %), one load
 config's sensor noise, and estimates with the road unknown. Prints one row
 per (road, zero, method): runs, covered within 3 reported std and healthy,
 silent (off by more than 3 std and healthy), median std of M and d_CG."""
-import argparse, json, os, statistics, subprocess, sys, tempfile
+import argparse, json, os, re, statistics, subprocess, sys, tempfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LOADS = [(150.0, 0.62), (280.0, 0.90)]
@@ -102,6 +102,14 @@ def road_text(name, seed, tmp):
     return road % seed if "%d" in road else road
 
 
+def germ(text, name, value):
+    """The germ coordinate of `value` for the config's uncertain `name`."""
+    m = re.search(r"- name: %s\n\s+nominal: ([0-9.eE+-]+)[^\n]*\n\s+relative_range: ([0-9.eE+-]+)" % name,
+                  text)
+    nominal, spread = float(m.group(1)), float(m.group(2))
+    return (value / nominal - 1.0) / spread
+
+
 def config_text(road, duration, zero, vehicle, mass, position, seed):
     """vehicle_imu.yaml with a truth: road is the road: section's text."""
     text = open(os.path.join(ROOT, "config", "vehicle_imu.yaml")).read()
@@ -112,8 +120,8 @@ def config_text(road, duration, zero, vehicle, mass, position, seed):
     text = text.replace("  duration: 10.0\n", "  duration: %.1f\n" % duration, 1)
     start = text.index("  road:                         # the road the simulated")
     end = text.index("  sensor:", start)
-    xi_m = (mass / 200.0 - 1.0) / 0.5
-    xi_d = (position / 0.762 - 1.0) / 0.25
+    xi_m = germ(text, "added_mass", mass)
+    xi_d = germ(text, "added_mass_position", position)
     truth = "  road: %s\n  xi: [%.10f, %.10f]\n" % (road, xi_m, xi_d)
     if vehicle:
         truth += "  vehicle: {%s}\n" % ", ".join("%s: %s" % kv for kv in OFF.items())
