@@ -126,6 +126,8 @@ print(json.dumps({
     "node_load_changed_at_s": c.get("load_changed_at_s"),
     "node_last_sample_index": (last or {}).get("sample_index"),
     "node_last_load_changes": (last or {}).get("load_changes"),
+    "node_max_lag_at_s": c.get("max_lag_at_s"),
+    "node_own_max_lag_ms": c.get("own_max_lag_ms"),
     "node_input_max_lag_ms": c.get("input_max_lag_ms"),
     "node_diag_max_lag_ms": c.get("diag_max_lag_ms"),
     "node_diag_load_changes": c.get("diag_load_changes"),

@@ -20,7 +20,11 @@
 // (load_changed_at_s); first_time_s and first_arrival_unix (the first estimate's
 // drive time and wall clock, to place a wall-clock sample on the drive); the
 // node's own /diagnostics figures last seen (diag_max_lag_ms: its input status's
-// "max lag (ms)", in stamp time; diag_load_changes), null when none arrived.
+// "max lag (ms)", in stamp time; diag_load_changes), null when none arrived;
+// max_lag_at_s (the `time` of the estimate with the largest delay) and
+// own_max_lag_ms: the largest time from a joint_states message's arrival here
+// to its estimate's, the node's own part of the lag (what the player or the
+// machine's scheduling delays reaches both and cancels).
 #include <diagnostic_msgs/DiagnosticArray.h>
 #include <pc_ekf/ParameterEstimate.h>
 #include <ros/ros.h>
@@ -28,10 +32,12 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -62,14 +68,28 @@ struct Counter {
     const double delay =
         std::chrono::duration<double>(last.time_since_epoch()).count() - msg->header.stamp.toSec() / rate;
     min_delay = std::min(min_delay, delay);
-    max_delay = std::max(max_delay, delay);
+    if (delay > max_delay) {
+      max_delay = delay;
+      max_lag_at = msg->time;
+    }
     if (keep) delays.emplace_back(msg->header.stamp.toSec(), delay);
+    // The node's own part: this estimate's arrival minus its joint_states' here.
+    const auto input = input_arrival.find(msg->header.stamp.toNSec());
+    if (input != input_arrival.end()) {
+      own_max = std::max(own_max, std::chrono::duration<double>(last - input->second).count());
+      input_arrival.erase(input);
+    }
   }
+  double max_lag_at = 0.0;  // `time` of the estimate with the largest delay
+  std::unordered_map<std::uint64_t, Clock::time_point> input_arrival;  // by stamp, until answered
+  double own_max = 0.0;
   // The same delay for the input itself: what the player adds (not the estimator).
   double input_min = 1e300, input_max = -1e300;
   void onInput(const sensor_msgs::JointState::ConstPtr& msg) {
-    const double delay = std::chrono::duration<double>(Clock::now().time_since_epoch()).count() -
+    const Clock::time_point now = Clock::now();
+    const double delay = std::chrono::duration<double>(now.time_since_epoch()).count() -
                          msg->header.stamp.toSec() / rate;
+    input_arrival.emplace(msg->header.stamp.toNSec(), now);
     input_min = std::min(input_min, delay);
     input_max = std::max(input_max, delay);
   }
@@ -167,13 +187,15 @@ int main(int argc, char** argv) {
       "{\"received\": %ld, \"expected\": %d, \"first_to_last_s\": %.6f, \"samples_per_s\": "
       "%.3f, \"max_lag_ms\": %.3f, \"input_max_lag_ms\": %.3f, \"load_changed\": %zu, "
       "\"load_changed_at_s\": [%s], \"first_time_s\": %.6f, \"first_arrival_unix\": %.6f, "
-      "\"diag_max_lag_ms\": %s, \"diag_load_changes\": %s}\n",
+      "\"diag_max_lag_ms\": %s, \"diag_load_changes\": %s, \"max_lag_at_s\": %.6f, "
+      "\"own_max_lag_ms\": %.3f}\n",
       counter.received, expect, span,
       span > 0.0 ? static_cast<double>(counter.received - 1) / span : 0.0,
       counter.received > 0 ? 1e3 * (counter.max_delay - counter.min_delay) : 0.0,
       counter.input_max > counter.input_min ? 1e3 * (counter.input_max - counter.input_min) : 0.0,
       counter.load_changed_at.size(), changed_at.c_str(), counter.first_time, counter.first_unix,
-      jsonNumber(counter.diag_max_lag).c_str(), jsonNumber(counter.diag_load_changes).c_str());
+      jsonNumber(counter.diag_max_lag).c_str(), jsonNumber(counter.diag_load_changes).c_str(),
+      counter.max_lag_at, 1e3 * counter.own_max);
   if (!last_file.empty() && counter.last_msg) writeLast(last_file, *counter.last_msg);
   if (counter.keep) {
     std::ofstream out(lag_file.c_str());
