@@ -145,6 +145,9 @@ print(json.dumps({
     "node_samples_lost": expected - received,
     "node_replay_wall_s": float(sys.argv[5]) - float(sys.argv[4]),
     "node_max_lag_ms": counts.get("max_lag_ms") if received > 0 else None,
+    # Its parts: the input's own delay (player, scheduling) and the node's own.
+    "node_input_max_lag_ms": counts.get("input_max_lag_ms") if received > 0 else None,
+    "node_own_max_lag_ms": counts.get("own_max_lag_ms") if received > 0 else None,
 }))
 PY
 pc_ekf_log "node: $(cat "$json")"

@@ -49,6 +49,7 @@ EXTRA_COMMANDS = [
     "cmake", "make", "g++", "clang", "clang++", "llvm-symbolizer", "colcon",
     "setsid", "timeout", "pgrep", "dpkg-query", "apt-cache",
     "dask-scheduler", "dask-worker",  # lib/fleet_test.sh, docs/fleet.md (estimate_fleet)
+    "time",  # lib/bench_long.sh: /usr/bin/time -v (not the shell's keyword)
 ]
 
 

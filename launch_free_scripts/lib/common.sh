@@ -41,6 +41,7 @@ PC_EKF_APT_PACKAGES=(
   ccache                         # compiler cache: clones and worktrees on one machine share objects
   python3-distributed            # scripts/estimate_fleet: Dask (dask-scheduler, dask-worker, client); optional at run time
   python3-pytest                 # test.sh: estimate_fleet's modules (test/fleet)
+  time                           # bench.sh (lib/bench_long.sh): estimate_offline's peak RSS, /usr/bin/time -v
 )
 
 pc_ekf_log() { echo "[pc_ekf] $*" >&2; }
