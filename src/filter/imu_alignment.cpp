@@ -168,17 +168,7 @@ MeasurementSeries alignImuRecord(const MeasurementSeries& samples,
     if (k > 0 && stamps_ns[k] < stamps_ns[k - 1]) {
       throw std::invalid_argument("alignImuRecord: samples not in stamp order");
     }
-    switch (aligner.align(out[k], stamps_ns[k])) {
-      case ImuAlignment::kAligned:
-        ++n.aligned;
-        break;
-      case ImuAlignment::kNoBracket:
-        ++n.no_bracket;
-        break;
-      case ImuAlignment::kGap:
-        ++n.gap;
-        break;
-    }
+    n.count(aligner.align(out[k], stamps_ns[k]));
   }
   return out;
 }

@@ -90,6 +90,11 @@ class ImuAligner {
 struct ImuAlignmentCounts {
   int aligned = 0, no_bracket = 0, gap = 0;
   int readings_refused = 0;  // out of order or duplicate stamps
+  void count(ImuAlignment a) {
+    if (a == ImuAlignment::kAligned) ++aligned;
+    if (a == ImuAlignment::kNoBracket) ++no_bracket;
+    if (a == ImuAlignment::kGap) ++gap;
+  }
 };
 
 // A whole record (the bag reader): `samples` in stamp order with their

@@ -474,11 +474,9 @@ void OneStepFilter::reopen() {
                         propagator_->priorState().bottomRows(np), settings_.reopen);
     return;
   }
-  std::vector<int> rows = load_rows_;
-  if (settings_.reopen.mode != ReopenMode::kLoad) {  // width, prior: every parameter
-    rows.clear();
-    for (int i = 0; i < np; ++i) rows.push_back(i);
-  }
+  // width, prior: every parameter (a load change goes through reloadFromChange)
+  std::vector<int> rows(static_cast<std::size_t>(np));
+  for (int i = 0; i < np; ++i) rows[static_cast<std::size_t>(i)] = i;
   horizon_->reopen(rows);
   x_.bottomRows(np) = horizon_->coefficients();
 }
@@ -551,7 +549,6 @@ bool OneStepFilter::reloadFromChange(StepResult& r) {
     horizon_->reopen(load_rows_);
   } else {
     horizon_ = std::move(best);
-    change_samples_ = static_cast<int>(best_verdicts.size());
     load_change_time_ = best_start;
     ++load_changes_;
     rejected_ += static_cast<int>(best_verdicts.back().gated) - static_cast<int>(r.gated);

@@ -132,7 +132,6 @@ class OneStepFilter {
   int changeSpan() const;  // samples the horizon keeps for that
   double changeLevel(int dof);  // NIS level above which a sample counts as changed
   std::vector<double> change_level_;
-  int change_samples_ = 0;  // samples re-assimilated at the last load change
   int load_changes_ = 0;
   double load_change_time_ = std::numeric_limits<double>::quiet_NaN();
   // Re-runs the kept samples from a working prior around r; r when impossible.

@@ -174,6 +174,17 @@ void runGrid(const EstimatorConfig& c, const MeasurementSeries& series,
   checkPrediction(c, series, *model, ParameterMapping(*model, c.uncertain), p.mean, r);
 }
 
+// Every run's end: the road-free caveat and the wall time since `start`.
+void finishRun(const EstimatorConfig& c, std::chrono::steady_clock::time_point start,
+               OfflineResult* r) {
+  const std::string caveat = roadFreeCaveat(c);
+  if (!caveat.empty()) {
+    r->healthy = false;
+    r->warnings.push_back(caveat);
+  }
+  r->wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace
 
 BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
@@ -242,12 +253,7 @@ OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const MeasurementSeri
                         -std::numeric_limits<double>::infinity());
   }
   run.finish(readings.size(), decimated);
-  const std::string caveat = roadFreeCaveat(c);
-  if (!caveat.empty()) {
-    r.healthy = false;
-    r.warnings.push_back(caveat);
-  }
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  finishRun(c, start, &r);
   return r;
 }
 
@@ -277,12 +283,7 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& c, const MeasurementSe
       runGrid(c, series, model, progress, grid_cache, samples, &r);
       break;
   }
-  const std::string caveat = roadFreeCaveat(c);
-  if (!caveat.empty()) {
-    r.healthy = false;
-    r.warnings.push_back(caveat);
-  }
-  r.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  finishRun(c, start, &r);
   return r;
 }
 

@@ -255,17 +255,7 @@ void alignBagImu(const std::string& path, rosbag::Bag& bag, const BagReadOptions
   std::size_t next = 0;
   const auto alignReady = [&](bool all) {
     for (; next < record.samples.size() && (all || aligner.ready(stamps[next])); ++next) {
-      switch (aligner.align(record.samples[next], stamps[next])) {
-        case ImuAlignment::kAligned:
-          ++n.aligned;
-          break;
-        case ImuAlignment::kNoBracket:
-          ++n.no_bracket;
-          break;
-        case ImuAlignment::kGap:
-          ++n.gap;
-          break;
-      }
+      n.count(aligner.align(record.samples[next], stamps[next]));
     }
   };
   try {
