@@ -75,6 +75,19 @@ double MovingHorizon::clockOffset() const {
                      : settings_.clock_offset * mean_[offset_];
 }
 
+double MovingHorizon::shiftedOffset(double state) const {
+  const double bound = 3.0 * settings_.clock_offset;
+  return std::clamp(settings_.clock_offset * state, -bound, bound);
+}
+
+double MovingHorizon::differenceStep(double dt) const {
+  return std::clamp(dt, 0.0, settings_.clock_offset);
+}
+
+double MovingHorizon::readingLag(double dt) const {
+  return offset_ >= 0 ? 3.0 * settings_.clock_offset + differenceStep(dt) : 0.0;
+}
+
 double MovingHorizon::clockOffsetStd() const {
   return offset_ < 0 ? std::numeric_limits<double>::quiet_NaN()
                      : settings_.clock_offset * std::sqrt(std::max(0.0, cov_(offset_, offset_)));
@@ -89,7 +102,6 @@ void MovingHorizon::reset() {
   previous_time_ = 0.0;
   recent_.clear();
   anchor_rows_.clear();
-  rate_weight_ = rate_mean_ = rate_square_ = rate_noise_ = 0.0;
   startWindow();
 }
 
@@ -108,11 +120,12 @@ void MovingHorizon::startWindow() {
   window_start_ = -1.0;  // set by the window's first sample
 }
 
-bool MovingHorizon::readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y) {
+bool MovingHorizon::readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
+                               double shift) {
   const MechanicalModel& model = propagator_.model();
   y = Eigen::ArrayXXd::Zero(model.stateSize(), th.cols());
-  if (!anchor_rows_.empty()) return anchoredReadings(th, time, y);
-  model.prepare(propagator_.mapping().fullParameters(th))->readings(time, y);
+  if (!anchor_rows_.empty()) return anchoredReadings(th, time, y, shift);
+  model.prepare(propagator_.mapping().fullParameters(th))->readingsShifted(time, shift, y);
   evaluations_ += th.cols();
   return true;
 }
@@ -141,8 +154,11 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
   for (int i = 0; i <= n; ++i) {
     if (!model.invalidReason(full.col(i)).empty()) return false;
   }
+  // With a clock offset the IMU stamped m.time read what the inputs drove
+  // at m.time - offset.
+  const double shift = offset_ >= 0 ? shiftedOffset(at[offset_]) : 0.0;
   Eigen::ArrayXXd y;
-  if (!readingsAt(th, m.time, y)) return false;
+  if (!readingsAt(th, m.time, y, shift)) return false;
   Eigen::MatrixXd z(c, n + 1);
   for (int r = 0; r < c; ++r) {
     z.row(r) = model.observationMatrix().row(m.channels[static_cast<std::size_t>(r)]) * y.matrix();
@@ -169,66 +185,26 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
     *z0 += jacobian->col(n) * at[n];
   }
   if (offset_ >= 0) {
-    // A reading stamped t was taken at t - offset. What moves with it is
-    // the part the inputs (the suspension) drive, the specific force s: the
-    // roll angle is the IMU's own gyro integrated, read off the same clock.
-    // accel_y, accel_z = s (sin, cos) phi: slopes -s' (sin, cos) phi, s' at
-    // `at` from the predictions at this sample and the two before. gyro_x
-    // is the IMU's previous reading plus an increment over dt: its slope is
-    // of order offset * dt, left out.
+    // The slope in the offset: a central difference a sample (at most the
+    // offset's prior std: a decimated stream reads the full-rate inputs)
+    // either side of the shifted instant (the caller hands samples over once
+    // the inputs after it are in: readingLag). The difference of inputs one sample
+    // apart carries a few hundredths of the rate's spread: no errors in
+    // variables to speak of.
     jacobian->col(offset_).setZero();
-    if (dt > 0.0) {
-      // The rate at t by the second-order backward difference (no lag of
-      // half a sample) over points two samples apart (less of the inputs'
-      // noise than one sample apart).
-      Eigen::ArrayXXd before, earlier;
-      constexpr double kb = 2.0;  // samples between the difference's points
-      if (!readingsAt(th.col(0), m.time - kb * dt, before)) return false;
-      if (!readingsAt(th.col(0), m.time - 2.0 * kb * dt, earlier)) return false;
-      const Eigen::MatrixXd& h = model.observationMatrix();
-      const auto force = [&](const Eigen::ArrayXXd& at_time, double* ay, double* az) {
-        *ay = (h.row(accel_y_) * at_time.matrix().col(0))(0);
-        *az = (h.row(accel_z_) * at_time.matrix().col(0))(0);
-        return std::hypot(*ay, *az);
-      };
-      double ay = 0.0, az = 0.0, unused_y = 0.0, unused_z = 0.0;
-      const double s0 = force(y, &ay, &az);
-      const double s1 = force(before, &unused_y, &unused_z);
-      const double s2 = force(earlier, &unused_y, &unused_z);
-      const double observed = (3.0 * s0 - 4.0 * s1 + s2) / (2.0 * kb * dt);  // of the specific force
-      // The rate carries the inputs' noise, which would dilute the slope
-      // (errors in variables): regression calibration uses its best linear
-      // predictor mean + lambda (observed - mean), lambda = 1 - noise / spread,
-      // the noise from the inherited variance of accel_z (the differences'
-      // weights 3, -4, 1 over 2 kb dt), mean and spread over about 10 s.
-      double noise = 0.0;
+    const double h = differenceStep(dt);
+    if (h > 0.0) {
+      Eigen::ArrayXXd later, earlier;
+      if (!readingsAt(th.col(0), m.time, later, shift + h)) return false;
+      if (!readingsAt(th.col(0), m.time, earlier, shift - h)) return false;
+      const Eigen::VectorXd slope =
+          (later.matrix().col(0) - earlier.matrix().col(0)) * (settings_.clock_offset / (2.0 * h));
       for (int r = 0; r < c; ++r) {
-        if (m.channels[static_cast<std::size_t>(r)] == accel_z_ && m.extra_covariance.rows() > r) {
-          noise = m.extra_covariance(r, r) * 26.0 / std::pow(2.0 * kb * dt, 2);
-        }
-      }
-      if (learn_rate_) {
-        const double a = std::min(1.0, dt / 10.0);
-        rate_weight_ = (1.0 - a) * rate_weight_ + a;
-        rate_mean_ = (1.0 - a) * rate_mean_ + a * observed;
-        rate_square_ = (1.0 - a) * rate_square_ + a * observed * observed;
-        rate_noise_ = (1.0 - a) * rate_noise_ + a * noise;
-      }
-      double rate = observed;
-      if (rate_weight_ > 0.0) {
-        const double mean = rate_mean_ / rate_weight_;
-        const double spread = rate_square_ / rate_weight_ - mean * mean;
-        const double lambda =
-            spread > 0.0 ? std::clamp(1.0 - rate_noise_ / rate_weight_ / spread, 0.05, 1.0) : 1.0;
-        rate = mean + lambda * (observed - mean);
-      }
-      for (int r = 0; r < c; ++r) {
-        const int ch = m.channels[static_cast<std::size_t>(r)];
-        if (ch == accel_y_) (*jacobian)(r, offset_) = -settings_.clock_offset * rate * ay / s0;
-        if (ch == accel_z_) (*jacobian)(r, offset_) = -settings_.clock_offset * rate * az / s0;
+        (*jacobian)(r, offset_) = model.observationMatrix().row(m.channels[static_cast<std::size_t>(r)]) * slope;
       }
     }
-    *z0 += jacobian->col(offset_) * at[offset_];
+    // Beyond the bound the prediction was taken at it.
+    *z0 += jacobian->col(offset_) * (at[offset_] - shift / settings_.clock_offset);
   }
   const NoiseWhitening white(noise, m);
   *values = m.values;
@@ -281,16 +257,14 @@ HorizonStep MovingHorizon::propose(const Measurement& m, const NoiseModel& noise
   // from where it was linearised (a wide prior, a load just re-opened), the
   // sample is linearised again at that posterior mean, from the same prior.
   at_ = mean_;
-  learn_rate_ = true;  // the offset's rate moments: once per new sample
   for (int pass = 0;; ++pass) {
     Eigen::VectorXd values, z0, r;
     Eigen::MatrixXd j;
     *mean = mean_;
     *cov = cov_;
-    // The offset's slope needs four samples before this one.
-    const double dt = previous_time_ > 3.0 * (m.time - previous_time_) ? m.time - previous_time_ : 0.0;
+    // The offset's slope needs a sample before this one.
+    const double dt = previous_time_ > 0.0 ? m.time - previous_time_ : 0.0;
     const bool ok = predict(m, dt, noise, at_, &values, &z0, &j, &r);
-    learn_rate_ = false;
     if (!ok) {
       s.update = UpdateDiagnostics();
       s.update.finite = false;
@@ -311,6 +285,7 @@ void MovingHorizon::accept(const Measurement& m, HorizonStep& s, const Eigen::Ve
   if (window_start_ < 0.0) window_start_ = m.time;
   const double dt = m.time - previous_time_;
   previous_time_ = m.time;
+  last_gap_ = dt;
   const bool used = s.update.finite && !s.gated && !m.channels.empty();
   if (used) {
     if (damp) {
@@ -346,7 +321,7 @@ void MovingHorizon::endWindow(HorizonStep& s) {
       Eigen::VectorXd values, z0, r;
       Eigen::MatrixXd j;
       UpdateDiagnostics d;
-      if (!predict(k.m, k.m.time - 4.0 * k.dt > 0.0 ? k.dt : 0.0, *noise_, at, &values, &z0, &j, &r)) {
+      if (!predict(k.m, k.m.time - k.dt > 0.0 ? k.dt : 0.0, *noise_, at, &values, &z0, &j, &r)) {
         ok = false;
         break;
       }
@@ -475,7 +450,8 @@ Eigen::ArrayXd MovingHorizon::tilts(const Eigen::ArrayXXd& y) const {
   return ay.binaryExpr(az, [](double a, double b) { return std::atan2(a, b); });
 }
 
-bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y) {
+bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
+                                     double shift) {
   // Each column twice: as it is and with the load at the anchor. The second
   // gives the tilt the body has at the anchor (the gyro's integral is the
   // same in both); accel_y and accel_z are turned to it (tare: no offsets).
@@ -490,7 +466,7 @@ bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eig
     if (!model.invalidReason(full.col(c)).empty()) return false;
   }
   Eigen::ArrayXXd all = Eigen::ArrayXXd::Zero(model.stateSize(), 2 * cols);
-  model.prepare(full)->readings(time, all);
+  model.prepare(full)->readingsShifted(time, shift, all);
   evaluations_ += 2 * cols;
   const Eigen::ArrayXd tilt = tilts(all);
   y = all.leftCols(cols);
@@ -519,8 +495,14 @@ double MovingHorizon::windowStart() const {
     t = recent_.front().m.time;
     gap = t - recent_.front().previous_time;
   }
-  // The clock offset's slope reads the predictions four samples before.
-  if (offset_ >= 0 && std::isfinite(t)) t -= 4.0 * std::max(gap, 0.0);
+  // The clock offset reads the inputs up to 3 prior std and a difference
+  // step (at most one more) before a sample (and the sample before that),
+  // for the samples the caller still holds (after the last one taken) too.
+  if (offset_ >= 0 && previous_time_ > 0.0 && !(previous_time_ > t)) {
+    t = previous_time_;
+    gap = last_gap_;
+  }
+  if (offset_ >= 0 && std::isfinite(t)) t -= 4.0 * settings_.clock_offset + std::max(gap, 0.0);
   return t;
 }
 

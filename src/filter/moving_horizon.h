@@ -105,6 +105,11 @@ class MovingHorizon {
   // not estimated (settings.clock_offset 0).
   double clockOffset() const;
   double clockOffsetStd() const;
+  // With a clock offset, a sample is processed once the inputs after it,
+  // up to 3 prior std of the offset and a difference step beyond, are in:
+  // process() those at least this much older than the latest input. 0:
+  // process every sample when it comes.
+  double readingLag(double dt) const;
 
  private:
   struct Recent {  // a sample and the state before it
@@ -134,8 +139,9 @@ class MovingHorizon {
   bool predict(const Measurement& m, double dt, const NoiseModel& noise,
                const Eigen::VectorXd& at, Eigen::VectorXd* values, Eigen::VectorXd* z0,
                Eigen::MatrixXd* jacobian, Eigen::VectorXd* variances);
-  // Readings (model state rows) of parameter columns th at `time`.
-  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y);
+  // Readings (model state rows) of parameter columns th at `time`, the
+  // inputs `shift` earlier (ModelBatch::readingsShifted).
+  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y, double shift = 0.0);
   void endWindow(HorizonStep& s);
   // reopen() with the roll angle carried: the angle's error moved to the
   // new load's static tilt (false: not possible, nothing changed).
@@ -144,7 +150,8 @@ class MovingHorizon {
   Eigen::ArrayXd tilts(const Eigen::ArrayXXd& y) const;
   // Readings of parameter columns th (theta) with the angle at the anchor's
   // tilt (after a load change); false: not admissible or not finite.
-  bool anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y);
+  bool anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
+                        double shift);
   std::vector<int> anchor_rows_;  // the load's rows, once a load change came
   Eigen::VectorXd anchor_;        // theta: the load at the start (its mean then)
   void startWindow();
@@ -158,11 +165,15 @@ class MovingHorizon {
   bool angle_ = false;  // the roll angle's error is the last state
   int accel_y_ = -1, accel_z_ = -1, gyro_ = -1;
   double previous_time_ = 0.0;
+  double last_gap_ = 0.0;  // the last sample's time since the one before
   int last() const { return parameters_; }  // the angle's row
   int offset_ = -1;  // the clock offset's row (units of settings_.clock_offset); -1: none
-  // The offset slope's rate: exponentially weighted moments (predict).
-  bool learn_rate_ = false;
-  double rate_weight_ = 0.0, rate_mean_ = 0.0, rate_square_ = 0.0, rate_noise_ = 0.0;
+  // The offset (s) a state value stands for, held within 3 prior std (the
+  // inputs after the shifted instant are in: readingLag).
+  double shiftedOffset(double state) const;
+  // The offset slope's difference step: the sample interval dt, at most the
+  // offset's prior std.
+  double differenceStep(double dt) const;
   void walk(Eigen::MatrixXd& cov, double dt) const;  // the last sample's (window re-runs)
   MovingHorizonSettings settings_;
   Eigen::VectorXd prior_mean_, prior_std_, lower_, upper_;

@@ -222,6 +222,7 @@ void OneStepFilter::reset() {
     horizon_->reset();
     x_.bottomRows(propagator_->parameterCount()) = horizon_->coefficients();
   }
+  lagged_.clear();
   t_ = 0.0;
   samples_ = 0;
   rejected_ = 0;
@@ -572,20 +573,29 @@ void OneStepFilter::horizonUpdate(const Measurement& m, double dt, StepResult& r
   t_ = m.time;
   r.index = ++samples_;
   r.time = m.time;
-  const HorizonStep h = horizon_->process(
-      m, settings_.noise,
-      [this](int dof) { return settings_.innovation_gate > 0.0 ? gateBound(dof) : 0.0; },
-      settings_.support == SupportRule::kDamp);
-  r.update = h.update;
-  r.gated = h.gated;
-  r.damping = h.damping;
-  if (!m.channels.empty() && !h.update.finite) {
-    r.rolled_back = true;
-    ++rejected_;
-  } else if (h.gated) {
-    ++rejected_;
+  const auto gate = [this](int dof) {
+    return settings_.innovation_gate > 0.0 ? gateBound(dof) : 0.0;
+  };
+  // With a clock offset the horizon takes each sample once the inputs after
+  // it are in (readingLag): the samples wait here, in order.
+  lagged_.push_back(m);
+  const double lag = horizon_->readingLag(dt);
+  while (!lagged_.empty() && lagged_.front().time <= m.time - lag) {
+    const Measurement& next = lagged_.front();
+    const HorizonStep h = horizon_->process(next, settings_.noise, gate,
+                                            settings_.support == SupportRule::kDamp);
+    r.update = h.update;
+    r.gated = h.gated;
+    r.damping = h.damping;
+    if (!next.channels.empty() && !h.update.finite) {
+      r.rolled_back = true;
+      ++rejected_;
+    } else if (h.gated) {
+      ++rejected_;
+    }
+    r.relinearized = r.relinearized || h.reruns > 0;
+    lagged_.pop_front();
   }
-  r.relinearized = h.reruns > 0;
   x_.bottomRows(np) = horizon_->coefficients();
 }
 

@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <functional>
+#include <deque>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -171,6 +172,7 @@ class OneStepFilter {
   StepResult processSample(const Measurement& m);
   int restarts_ = 0;
   std::unique_ptr<MovingHorizon> horizon_;  // filter.linearization: mean
+  std::deque<Measurement> lagged_;          // samples the horizon has not taken yet
   std::vector<int> load_rows_;              // reopen.mode load: added_mass...
   std::unique_ptr<DeferredRerun> rerun_;  // a deferred re-run under way
   Eigen::MatrixXd rerun_theta_;           // its working prior's parameter coefficients

@@ -42,6 +42,13 @@ class ModelBatch {
   // channel's reading at t, from the dynamic rows above them. integrate()
   // calls it at the end of every interval; initialState() includes them.
   virtual void readings(double /*t*/, Eigen::ArrayXXd& /*y*/) const {}
+  // Readings stamped t by a sensor whose clock runs `shift` ahead of the
+  // inputs': what the inputs drive is taken at t - shift, what the sensor
+  // carries itself (a road-free IMU's gyro and its integral) at t. Models
+  // whose inputs are not read (shift 0 only) keep the default.
+  virtual void readingsShifted(double t, double shift, Eigen::ArrayXXd& y) const {
+    readings(t - shift, y);
+  }
 };
 
 // How readings are zeroed (measurement.zero), docs/method.md §1.6:

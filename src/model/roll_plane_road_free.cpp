@@ -79,17 +79,27 @@ class RoadFreeBatch : public ModelBatch {
     }
     return y;
   }
-  void readings(double t, Eigen::ArrayXXd& y) const override {
+  void readings(double t, Eigen::ArrayXXd& y) const override { readingsShifted(t, 0.0, y); }
+  // The suspension's inputs at t - shift; the gyro, the roll integrated from
+  // it and the previous sample's instant on the IMU's clock (t).
+  void readingsShifted(double t, double shift, Eigen::ArrayXXd& y) const override {
     const int n = in_->count();
     const bool gyro = n > kGyro;
     double now[5] = {0, 0, 0, 0, 0}, before[5] = {0, 0, 0, 0, 0};
-    in_->at(t, now);
+    in_->at(t - shift, now);
     const double t_before = in_->previousTime(t);
     const bool at_rest = !(t_before > 0.0);
-    if (!at_rest) in_->at(t_before, before);
+    double gyro_before = 0.0;
+    if (!at_rest) {
+      in_->at(t_before - shift, before);
+      if (gyro) {
+        double own[5] = {0, 0, 0, 0, 0};
+        if (shift != 0.0) in_->at(t_before, own);
+        gyro_before = shift != 0.0 ? own[kGyro] : before[kGyro];
+      }
+    }
     const double roll = gyro ? in_->integral(kGyro, t) : 0.0;
     const double roll_before = gyro && !at_rest ? in_->integral(kGyro, t_before) : 0.0;
-    const double gyro_before = gyro && !at_rest ? before[kGyro] : 0.0;
     double out[3];
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
       outputs(*c_, c_->points[static_cast<std::size_t>(q)], now, before, at_rest, t - t_before,
