@@ -822,6 +822,7 @@ EstimatorConfig parseConfig(const YAML::Node& given, const std::string& source_n
   if (zero != "rest" && zero != "tare") m.fail("zero", "'" + zero + "'", "rest or tare");
   c.measurement.zero = zeroConventionFromString(zero);
   m.number("travel_blend", c.measurement.travel_blend, 0.0, 10.0);
+  m.number("standstill", c.measurement.standstill, 0.0, 60.0);
   readPerChannel(m, "noise_relative", c.measurement, c.measurement.noise_relative,
                  c.measurement.noise_relative_per_channel, model_channels);
   m.number("noise_floor", c.measurement.noise_floor, 0.0, kInf);

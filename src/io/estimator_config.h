@@ -65,6 +65,9 @@ struct MeasurementConfig {
   // measurement.travel_blend: road-free, each travel reading blended with its
   // rate's integral over this time constant (s; 0 = the raw readings).
   double travel_blend = 0.0;
+  // measurement.standstill: road-free, the window (s) over which a stop is
+  // recognised (the inputs then taken as standing: standstill.h); 0 = never.
+  double standstill = 0.0;
   double noise_relative = 0.01;  // synthetic data: eps_j ~ N(0, (noise_relative z_true,j)^2)
   double noise_floor = 0.0;      // absolute std added in quadrature (synthetic data)
   // noise_relative as a list in the YAML: one value per channel (the model's

@@ -26,8 +26,22 @@ std::vector<std::string> RoadFreeStream::inputsFor(const EstimatorConfig& c,
   return names;
 }
 
+namespace {
+
+// Inputs by kind: travels (u...) and rates (v...).
+std::vector<int> inputsStarting(const std::vector<std::string>& inputs, char first) {
+  std::vector<int> out;
+  for (std::size_t i = 0; i < inputs.size(); ++i) {
+    if (!inputs[i].empty() && inputs[i][0] == first) out.push_back(static_cast<int>(i));
+  }
+  return out;
+}
+
+}  // namespace
+
 RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs)
-    : source_(c.source) {
+    : source_(c.source),
+      standstill_(0.0, {}, {}, {}, {}) {
   const ModelType& type = *c.model_type;
   for (const std::string& name : inputs) {
     input_channels_.push_back(type.description().channelIndex(name));
@@ -66,6 +80,13 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     relative_[e] = noise.channel_relative.size() != 0 ? noise.channel_relative[ch] : noise.r_relative;
     absolute_[e] = noise.rule == NoiseRule::kSensor ? noise.channel_std[ch] : std::sqrt(noise.r_floor);
   }
+  raw_absolute_ = absolute_;
+  raw_relative_ = relative_;
+  travel_inputs_ = inputsStarting(inputs, 'u');
+  rate_inputs_ = inputsStarting(inputs, 'v');
+  standstill_ = Standstill(c.measurement.standstill, travel_inputs_, rate_inputs_,
+                           std::vector<double>(absolute_.data(), absolute_.data() + absolute_.size()),
+                           std::vector<double>(relative_.data(), relative_.data() + relative_.size()));
   // Travel u blended with its rate v (the same suffix: u1/v1, u_fl/v_fl).
   blend_ = c.measurement.travel_blend;
   for (std::size_t i = 0; blend_ > 0.0 && i < inputs.size(); ++i) {
@@ -99,13 +120,27 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     const auto it = std::find(input_channels_.begin(), input_channels_.end(), m.channels[j]);
     if (it != input_channels_.end()) in[it - input_channels_.begin()] = m.values[static_cast<Eigen::Index>(j)];
   }
-  // The blends' next state, kept only if the sample is taken (the scratch's
-  // capacity is reused: nothing allocated per sample).
+  // A stop: the travels their means since it began, the rates 0; the blend
+  // holds the mean. The blends' and the stop's next state, kept only if the
+  // sample is taken (the scratch's capacity is reused).
+  raw_ = in;
+  const Standstill::Decision still = standstill_.decide(m.time, raw_);
+  standstill_.apply(still, raw_, &in);
   blend_next_ = blends_;
-  for (Blend& b : blend_next_) blendTravel(b, m.time, &in);
+  for (Blend& b : blend_next_) {
+    if (!still.standing) {
+      blendTravel(b, m.time, &in);
+      continue;
+    }
+    b.started = true;
+    b.u_blended = in[static_cast<std::size_t>(b.u)];
+    b.t_last = m.time;
+    b.v_last = 0.0;
+  }
   const std::string problem = inputs_->append(m.time, in.data());
   if (!problem.empty()) return problem;
   blends_.swap(blend_next_);
+  standstill_.commit(m.time, raw_, still);
   ++samples_;
   Measurement o = onlyChannels(m, outputs_);
   for (std::size_t j = 0; j < o.channels.size(); ++j) {
@@ -116,7 +151,15 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   // The sample's own inherited variance; the load it is weighed at (tare)
   // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
-  o.extra_covariance = inherited_at_(static_cast<std::size_t>(samples_ - 1))(o.channels, o.channels);
+  const auto k = static_cast<std::size_t>(samples_ - 1);
+  if (still.standing) {
+    if (!travels_at_) updateInputNoise();
+    const Eigen::MatrixXd standing =
+        travels_at_(k) / static_cast<double>(still.averaged) + others_at_(k);
+    o.extra_covariance = standing(o.channels, o.channels);
+  } else {
+    o.extra_covariance = inherited_at_(k)(o.channels, o.channels);
+  }
   *out = std::move(o);
   return "";
 }
@@ -140,6 +183,19 @@ void RoadFreeStream::blendTravel(Blend& b, double t, std::vector<double>* in) co
 void RoadFreeStream::updateInputNoise() {
   const double mean_accel_z = accel_z_count_ > 0 ? accel_z_sum_ / static_cast<double>(accel_z_count_) : 0.0;
   inherited_at_ = model_->inputNoiseBySample(absolute_, relative_, mean_accel_z);
+  if (!standstill_.enabled()) return;
+  // Standing: each travel's raw noise (its mean's is that over the readings
+  // averaged), no rate noise (zero), the other inputs' as they are.
+  Eigen::VectorXd travel_abs = Eigen::VectorXd::Zero(absolute_.size()), travel_rel = travel_abs;
+  Eigen::VectorXd other_abs = absolute_, other_rel = relative_;
+  for (int i : travel_inputs_) {
+    travel_abs[i] = raw_absolute_[i];
+    travel_rel[i] = raw_relative_[i];
+    other_abs[i] = other_rel[i] = 0.0;
+  }
+  for (int i : rate_inputs_) other_abs[i] = other_rel[i] = 0.0;
+  travels_at_ = model_->inputNoiseBySample(travel_abs, travel_rel, mean_accel_z);
+  others_at_ = model_->inputNoiseBySample(other_abs, other_rel, mean_accel_z);
 }
 
 bool RoadFreeStream::waitingForInputs(const Measurement& m) const {

@@ -14,6 +14,7 @@
 
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/io/estimator_config.h"
+#include "pc_ekf/io/standstill.h"
 #include "pc_ekf/model/mechanical_model.h"
 #include "pc_ekf/model/reading_inputs.h"
 
@@ -57,6 +58,9 @@ class RoadFreeStream {
   void forgetInputs(double needed_from, double kept_until) {
     inputs_->forget(needed_from, kept_until);
   }
+  // measurement.standstill: samples taken as standing, and stops recognised.
+  long standingSamples() const { return standstill_.standingSamples(); }
+  long stops() const { return standstill_.stops(); }
 
  private:
   // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +
@@ -84,6 +88,13 @@ class RoadFreeStream {
   long accel_z_count_ = 0;
   long samples_ = 0;
   MechanicalModel::SampleInputNoise inherited_at_;
+  // Standing: the travels' part (their raw noise, divided by the readings
+  // averaged) and the other inputs' (rates: none).
+  Standstill standstill_;
+  std::vector<double> raw_;  // the sample's inputs as read (scratch)
+  MechanicalModel::SampleInputNoise travels_at_, others_at_;
+  Eigen::VectorXd raw_absolute_, raw_relative_;  // each input's noise before any blend
+  std::vector<int> travel_inputs_, rate_inputs_;
 };
 
 // A whole record through the stream: the model and the outputs. The samples

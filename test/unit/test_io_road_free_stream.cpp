@@ -26,6 +26,7 @@ EstimatorConfig imuConfig(int samples, double duration) {
   root["sampling"]["samples"] = samples;
   root["sampling"]["duration"] = duration;
   root["measurement"]["travel_blend"] = 0.0;  // the raw travel: the formulation alone
+  root["measurement"]["standstill"] = 0.0;    // every sample as read
   // The collocation filter: its inherited covariance carries the angle's
   // walk and its re-linearisation defers re-runs (what these tests read).
   root["filter"]["linearization"] = "collocation";
@@ -216,6 +217,72 @@ TEST(RoadFreeStream, TravelBlendFollowsAnAgreeingRateAndCutsTheNoise) {
   EXPECT_NEAR(measured, assumed, 0.05 * assumed);
   EXPECT_LT(assumed, 0.4 * su);  // a third of the raw travel's noise
   EXPECT_NEAR(sum / n, 0.02, 3.0 * assumed / std::sqrt(n / 20.0));  // the sag kept
+}
+
+// measurement.standstill: noise alone (a vehicle standing) is recognised
+// after the window, the travel is then the mean of its readings since the
+// window began and the rate 0, and the covariance the predictions inherit
+// shrinks; motion (a 3 mm travel at 1.5 Hz) is never taken as standing, and
+// the first sample of motion after a stop is read as it is.
+TEST(RoadFreeStream, AStopTakesTheTravelsMeanAndNoRate) {
+  EstimatorConfig c = imuConfig(2000, 10.0);
+  c.measurement.standstill = 1.0;
+  const double dt = 0.005, su = std::hypot(5e-4, 0.01 * 0.02), sv = 5e-3;
+  const auto sample = [&](double t, double u1, double v1) {
+    Measurement m;
+    m.time = t;
+    m.channels = {0, 1, 2, 3, 4, 5, 6};
+    m.values = (Eigen::VectorXd(7) << u1, 0.02, v1, 0.0, 0.0, 9.81, 0.0).finished();
+    return m;
+  };
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c));
+  double sum = 0.0;
+  Measurement moving, standing;
+  for (int k = 1; k <= 1000; ++k) {  // 5 s standing
+    const double t = k * dt, u = 0.02 + su * normal(rng), v = sv * normal(rng);
+    sum += u;
+    Measurement out;
+    ASSERT_EQ(stream.add(sample(t, u, v), &out), "");
+    double in[5];
+    stream.inputs().at(t, in);
+    if (k <= 200) {  // the window (1 s after the first sample) not yet full: as read
+      EXPECT_EQ(in[0], u);
+      EXPECT_EQ(in[2], v);
+      moving = out;
+    } else {
+      EXPECT_NEAR(in[0], sum / k, 1e-12) << k;
+      EXPECT_EQ(in[2], 0.0);
+      standing = out;
+    }
+  }
+  EXPECT_EQ(stream.stops(), 1);
+  EXPECT_EQ(stream.standingSamples(), 800);
+  // accel_z's inherited variance: the springs' and dampers' noise gone.
+  const Eigen::Index z = 1;  // outputs: accel_y, accel_z, gyro_x
+  EXPECT_LT(standing.extra_covariance(z, z), 0.01 * moving.extra_covariance(z, z));
+  EXPECT_GT(standing.extra_covariance(z, z), 0.0);
+  // Motion starts: its first sample is read as it is, and the stop is over.
+  const double t = 1001 * dt;
+  Measurement out;
+  ASSERT_EQ(stream.add(sample(t, 0.02 + 0.003, 8.0 * sv), &out), "");
+  double in[5];
+  stream.inputs().at(t, in);
+  EXPECT_EQ(in[0], 0.02 + 0.003);
+  EXPECT_EQ(in[2], 8.0 * sv);
+  EXPECT_EQ(stream.standingSamples(), 800);
+  // A 3 mm travel at 1.5 Hz with its rate (plus the same noise): never standing.
+  RoadFreeStream driving(c, RoadFreeStream::inputsFor(c));
+  const double w = 2.0 * M_PI * 1.5, a = 0.003;
+  for (int k = 1; k <= 2000; ++k) {
+    const double tk = k * dt;
+    ASSERT_EQ(driving.add(sample(tk, 0.02 + a * std::sin(w * tk) + su * normal(rng),
+                                 a * w * std::cos(w * tk) + sv * normal(rng)),
+                          &out),
+              "");
+  }
+  EXPECT_EQ(driving.standingSamples(), 0);
 }
 
 TEST(RoadFreeStream, NeedsAReadingToPredict) {
