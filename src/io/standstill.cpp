@@ -8,6 +8,7 @@ namespace pc_ekf {
 namespace {
 constexpr double kEnter = 1.5;  // std: a window's RMS / spread below this is noise
 constexpr double kLeave = 5.0;  // std: a reading beyond this is motion
+constexpr double kStep = 3.0;   // std of the difference of a window's halves' means
 }  // namespace
 
 Standstill::Standstill(double window, std::vector<int> travels, std::vector<int> rates,
@@ -41,10 +42,20 @@ Standstill::Decision Standstill::decide(double t, const std::vector<double>& in)
       const double v = in[static_cast<std::size_t>(i)];
       if (std::abs(v) > kLeave * sigma(i, 0.0)) return d;
     }
+    // A reading far off, or the last window's mean off the stop's (a
+    // small load put in settles the body by less than a reading's noise).
+    const std::size_t rows = times_.size();
     for (int i : travels_) {
-      const double u = in[static_cast<std::size_t>(i)];
-      const double mean = sums_[static_cast<std::size_t>(i)] / n;
+      const auto c = static_cast<std::size_t>(i);
+      const double u = in[c];
+      const double mean = sums_[c] / n;
       if (std::abs(u - mean) > kLeave * sigma(i, mean)) return d;
+      double recent = u;
+      for (std::size_t r = 0; r < rows; ++r) recent += value(r, c);
+      recent /= static_cast<double>(rows + 1);
+      if (std::abs(recent - mean) > kLeave * sigma(i, mean) / std::sqrt(static_cast<double>(rows + 1))) {
+        return d;
+      }
     }
     d.standing = true;
     d.averaged = count_ + 1;
@@ -71,6 +82,14 @@ Standstill::Decision Standstill::decide(double t, const std::vector<double>& in)
     const double mean = sum / n;
     const double s = sigma(i, mean);
     if (!(square / n - mean * mean <= kEnter * kEnter * s * s)) return d;
+    // No step inside the window (a load just put in): its halves' means
+    // agree within 3 std of their difference, 2 s / sqrt(n).
+    double first = 0.0;
+    const std::size_t half = (rows + 1) / 2;
+    for (std::size_t r = 0; r < half; ++r) first += value(r, c);
+    const double second = sum - first;
+    const double step = second / (n - static_cast<double>(half)) - first / static_cast<double>(half);
+    if (!(std::abs(step) <= kStep * 2.0 * s / std::sqrt(n))) return d;
   }
   d.standing = true;
   d.averaged = static_cast<long>(rows) + 1;

@@ -26,8 +26,11 @@ class Standstill {
   // For the raw inputs `in` at t: standing is entered when over the last
   // `window` s (this sample included) every rate's RMS is below 1.5 times
   // its noise std and every travel's spread about its mean below 1.5 times
-  // its own (noise alone stays far below both), and left at the first rate
-  // or travel beyond 5 std of zero or of the stop's mean. Changes nothing.
+  // its own (noise alone stays far below both) with its window's halves'
+  // means within 3 std of each other (no step), and left at the first rate
+  // or travel beyond 5 std of zero or of the stop's mean, or when a travel's
+  // mean over the last window is 5 of its std off the stop's (a small load
+  // put in). Changes nothing.
   Decision decide(double t, const std::vector<double>& in) const;
   // Writes the standing inputs into `in`: travels their means, rates 0.
   void apply(const Decision& d, const std::vector<double>& raw, std::vector<double>* in) const;

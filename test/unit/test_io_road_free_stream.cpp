@@ -283,6 +283,20 @@ TEST(RoadFreeStream, AStopTakesTheTravelsMeanAndNoRate) {
               "");
   }
   EXPECT_EQ(driving.standingSamples(), 0);
+  // A small load put in: the travel settles 1.5 mm (less than 5 std of one
+  // reading), the stop ends within 0.2 s, and a new one starts a window on.
+  RoadFreeStream loaded(c, RoadFreeStream::inputsFor(c));
+  int ended = -1;
+  for (int k = 1; k <= 2000; ++k) {
+    const double tk = k * dt, sag = k > 1000 ? 0.0015 : 0.0;
+    ASSERT_EQ(loaded.add(sample(tk, 0.02 + sag + su * normal(rng), sv * normal(rng)), &out), "");
+    if (k > 1000 && ended < 0 && loaded.standingSamples() < k - 200) ended = k - 1000;
+  }
+  EXPECT_GT(ended, 0);
+  EXPECT_LE(ended, 40);
+  EXPECT_EQ(loaded.stops(), 2);
+  loaded.inputs().at(2000 * dt, in);
+  EXPECT_NEAR(in[0], 0.0215, 4.0 * su / std::sqrt(200.0));
 }
 
 TEST(RoadFreeStream, NeedsAReadingToPredict) {
