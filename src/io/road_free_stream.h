@@ -61,6 +61,7 @@ class RoadFreeStream {
   // measurement.standstill: samples taken as standing, and stops recognised.
   long standingSamples() const { return standstill_.standingSamples(); }
   long stops() const { return standstill_.stops(); }
+  bool standing() const { return standstill_.standing(); }
 
  private:
   // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +

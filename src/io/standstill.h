@@ -37,6 +37,7 @@ class Standstill {
   // Takes the sample (raw inputs) with its decision.
   void commit(double t, const std::vector<double>& raw, const Decision& d);
   bool enabled() const { return window_ > 0.0; }
+  bool standing() const { return standing_; }  // at the last sample taken
   long standingSamples() const { return standing_samples_; }
   long stops() const { return stops_; }
 

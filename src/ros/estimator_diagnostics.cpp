@@ -38,7 +38,8 @@ EstimatorDiagnostics::EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle p
   if (imuChannels(config.model_type->channelNames(), config.measurement.channels).any()) {
     updater_.add("imu", this, &EstimatorDiagnostics::reportImu);
   }
-  if (config.safeguards.reopen.mode == ReopenMode::kLoad || config.safeguards.horizon.clock_offset > 0.0) {
+  if (config.safeguards.reopen.mode == ReopenMode::kLoad || config.safeguards.horizon.clock_offset > 0.0 ||
+      config.measurement.standstill > 0.0) {
     updater_.add("load and clock", this, &EstimatorDiagnostics::reportLoad);
   }
 }

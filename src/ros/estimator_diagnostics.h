@@ -60,6 +60,10 @@ struct LastUpdate {
   std::vector<std::string> load_summary;  // "name: mean +- std" after it
   double clock_offset = std::numeric_limits<double>::quiet_NaN();
   double clock_offset_std = std::numeric_limits<double>::quiet_NaN();
+  // measurement.standstill: standing at the last sample, stops recognised,
+  // samples taken as standing.
+  bool standing = false;
+  long stops = 0, standing_samples = 0;
 };
 
 // The node's own upkeep (not stored in checkpoints): background checkpoint

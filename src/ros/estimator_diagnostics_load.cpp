@@ -1,5 +1,6 @@
-// The "load and clock" status: load changes found (filter.reopen.mode load)
-// and the clock offset between the IMU and the suspension (filter.horizon).
+// The "load and clock" status: load changes found (filter.reopen.mode load),
+// the clock offset between the IMU and the suspension (filter.horizon) and
+// the stops recognised (measurement.standstill).
 #include <cmath>
 #include <sstream>
 
@@ -21,6 +22,7 @@ void EstimatorDiagnostics::reportLoad(diagnostic_updater::DiagnosticStatusWrappe
   if (std::isfinite(u.clock_offset)) {
     m << "; clock offset " << 1e3 * u.clock_offset << " +- " << 1e3 * u.clock_offset_std << " ms";
   }
+  if (u.standing) m << "; standing still";
   // A new change is news for whoever watches (WARN once), not a fault.
   s.summary(fresh ? DiagnosticStatus::WARN : DiagnosticStatus::OK, m.str());
   s.add("load changes", u.load_changes);
@@ -29,6 +31,9 @@ void EstimatorDiagnostics::reportLoad(diagnostic_updater::DiagnosticStatusWrappe
   for (const std::string& line : u.load_summary) s.add("load after it", line);
   s.add("clock offset (ms, IMU stamps behind the suspension's)", 1e3 * u.clock_offset);
   s.add("clock offset std (ms)", 1e3 * u.clock_offset_std);
+  s.add("standing still", u.standing ? "yes" : "no");
+  s.add("stops recognised", u.stops);
+  s.add("samples standing", u.standing_samples);
 }
 
 }  // namespace pc_ekf

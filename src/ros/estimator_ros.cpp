@@ -565,6 +565,11 @@ void EstimatorRos::process(const ReleasedSample& sample) {
   last.load_change_time = e.estimate.load_change_time;
   last.clock_offset = e.estimate.clock_offset;
   last.clock_offset_std = e.estimate.clock_offset_stddev;
+  if (road_free_) {
+    last.standing = road_free_->standing();
+    last.stops = road_free_->stops();
+    last.standing_samples = road_free_->standingSamples();
+  }
   if (e.estimate.load_changed) {
     last.load_found_at = sample.measurement.time;
     last.load_summary.clear();
