@@ -201,7 +201,9 @@ TEST(SafeguardRateMonitor, ChanceReopensAreExpectedBesideLoadChanges) {
 // ---- the one-step filter ----
 
 // The speed bump with the live configs' safeguards (vehicle_live.yaml: gate
-// 1e-6, damping, drift on M, re-open after 3, window 20).
+// 1e-6, damping, drift on M, window 20) and the re-open rule at its quickest,
+// after 3 (the configs wait 20 samples: at their rates of 200 Hz to 1 kHz
+// after 3 re-opened by chance about once per 1000 samples).
 EstimatorConfig liveBump(int samples) {
   EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml");
   c.sampling.samples = samples;
