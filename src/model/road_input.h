@@ -9,6 +9,8 @@
 
 namespace pc_ekf {
 
+class HorizontalMotion;
+
 // The road under any number of contacts (a model's contact names, in order).
 class ContactRoad {
  public:
@@ -20,6 +22,9 @@ class ContactRoad {
   // Times in the open interval (t0, t1) where the input has a kink; the
   // integrator stops there so its order holds across them.
   virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+  // The vehicle's horizontal motion on this drive (turns, braking), when the
+  // drive has one; null: straight at constant speed (horizontal_motion.h).
+  virtual const HorizontalMotion* horizontalMotion() const { return nullptr; }
 };
 
 // A road under two contacts (the roll plane's tyres).

@@ -40,6 +40,14 @@ struct RollPlaneFields {
   T added_mass{};
   T added_mass_position{};
   T imu_position{};  // from the left end
+  // Heights above the mount plane (the roll axis) and the anti-roll bar
+  // (docs/models.md): all 0 is the paper's model.
+  T body_cg_height{};     // h_b
+  T added_mass_height{};  // h_M
+  T mount_height{};       // h_P, the mount plane above the ground
+  T wheel_radius{};       // r_w
+  T imu_height{};         // z_I
+  T anti_roll_bar{};      // k_a, N/m of travel difference
   // Settings.
   T damper_tanh_scale{};  // F_C = c * scale * tanh(rate * v)
   T damper_tanh_rate{};

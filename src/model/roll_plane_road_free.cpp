@@ -133,6 +133,7 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
     throw std::invalid_argument("road-free roll plane: inputs must be u1 u2 v1 v2 [gyro_x]");
   }
   h_.bottomRows(3).setIdentity();
+  constants(Eigen::MatrixXd(nominal_vector_));  // refuses what it does not model
   // With tare the record weighs the load (inputNoiseBySample): the springs'
   // force at the nominal vehicle, summed over the samples as they come.
   if (zero_ == ZeroConvention::kTare) {
@@ -166,6 +167,16 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
     }
   }
   const RollPlaneFields<int>& at = rollPlaneRows();
+  for (Eigen::Index q = 0; q < params.cols(); ++q) {
+    // Not modelled without a road yet: refused rather than ignored.
+    for (int row : {at.body_cg_height, at.added_mass_height, at.imu_height, at.anti_roll_bar}) {
+      if (params(row, q) != 0.0) {
+        throw std::invalid_argument(
+            "road-free roll plane: " + rollPlaneDescription().parameters().names()[row] +
+            " must be 0 (heights and the anti-roll bar need a road)");
+      }
+    }
+  }
   const std::vector<StaticEquilibrium> loaded = solveStaticEquilibria(params);
   const bool tare = zero_ == ZeroConvention::kTare;
   std::vector<StaticEquilibrium> unloaded;
