@@ -27,6 +27,9 @@ class HorizontalMotion {
   // Times in the open interval (t0, t1) where the motion has a kink or a
   // step (the integrator stops there).
   virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+  // False when a_x = a_y = 0 throughout (a straight drive: the models keep
+  // their paths without horizontal acceleration).
+  virtual bool accelerates() const { return true; }
 };
 
 // A constant motion from t = 0 on (a steady turn): tests and checks.

@@ -109,7 +109,9 @@ const ModelDescription& rollPlaneDescription() {
         false},
        {"accel_z", "m/s^2",
         "IMU specific force along body z (up): (g + a) cos(phi) - a_y phi - z_I phi'^2", false},
-       {"gyro_x", "rad/s", "IMU roll rate (phi > 0: left side up)", false}},
+       {"gyro_x", "rad/s", "IMU roll rate (phi > 0: left side up)", false},
+       {"speed", "m/s", "forward speed over ground (the drive's horizontal motion)", false},
+       {"gyro_z", "rad/s", "yaw rate, positive turning left: a_y / speed", false}},
       {{"left", "y1", "left tyre"}, {"right", "y2", "right tyre"}},
       {{"left_suspension", "left", "u1", "v1"}, {"right_suspension", "right", "u2", "v2"}},
   });

@@ -268,12 +268,13 @@ class RollPlaneBatch : public ModelBatch {
 
   Eigen::ArrayXXd initialState() const override {
     // The equilibrium (docs/method.md §1.4), and its readings.
-    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(r_ ? 15 : 8, pointCount());
+    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(r_ ? 8 + RollPlaneModel::kChannels : 8, pointCount());
     if (r_) readings(0.0, y);
     return y;
   }
 
-  // Rows 8..14: u1 u2 v1 v2 accel_y accel_z gyro_x (docs/method.md §1.6).
+  // Rows 8..16: u1 u2 v1 v2 accel_y accel_z gyro_x (docs/method.md §1.6), speed
+  // gyro_z (the motion's, the same at every point).
   void readings(double t, Eigen::ArrayXXd& y) const override {
     if (!r_) return;
     const Eigen::Index n = pointCount();
@@ -281,6 +282,9 @@ class RollPlaneBatch : public ModelBatch {
     dynamic = y.topRows(8);
     derivatives(t, dynamic, rates);
     const RollPlaneReadings& r = *r_;
+    const HorizontalState drive = motion_ ? motion_->at(t) : HorizontalState();
+    y.row(15).setConstant(drive.speed);
+    y.row(16).setConstant(drive.yaw_rate);
     for (Eigen::Index q = 0; q < n; ++q) {
       for (int i = 0; i < 2; ++i) {
         y(8 + i, q) = y(i, q) - y(2 + i, q) - r.travel_offset(i, q);
@@ -408,7 +412,7 @@ RollPlaneModel::RollPlaneModel(ModelParameters nominal, std::shared_ptr<const Co
       tanh_rate_(nominal_.settings[rollPlaneRows().damper_tanh_rate]),
       readings_(readings),
       state_names_(rollPlaneDescription().stateNames()),
-      h_(Eigen::MatrixXd::Zero(7, 8)),
+      h_(Eigen::MatrixXd::Zero(kChannels, 8)),
       road_(std::move(road)) {
   // Tare offsets depend on each point's parameters: readings as states.
   if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
@@ -419,8 +423,8 @@ RollPlaneModel::RollPlaneModel(ModelParameters nominal, std::shared_ptr<const Co
     for (const std::string& c : rollPlaneDescription().channelNames()) {
       state_names_.push_back("reading_" + c);
     }
-    h_ = Eigen::MatrixXd::Zero(7, 15);
-    h_.rightCols(7).setIdentity();
+    h_ = Eigen::MatrixXd::Zero(kChannels, 8 + kChannels);
+    h_.rightCols(kChannels).setIdentity();
     return;
   }
   // u_i = x_i - xr_i, v_i = xidot - xridot (docs/method.md §1.6); the IMU
@@ -487,7 +491,8 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
   PointConstants c(count);
   using C = PointConstants;
   const double scale = damper_ == DamperLaw::kTanh ? tanh_scale_ : 1.0;
-  bool elevated = road_->horizontalMotion() != nullptr;
+  const HorizontalMotion* motion = road_->horizontalMotion();
+  bool elevated = motion && motion->accelerates();
   for (int q = 0; q < count; ++q) {
     const double* p = &params(0, q);
     const StaticEquilibrium& e = equilibria[q];

@@ -124,7 +124,7 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
       zero_(zero),
       nominal_vector_(nominal.toVector()),
       state_names_{"reading_accel_y", "reading_accel_z", "reading_gyro_x"},
-      h_(Eigen::MatrixXd::Zero(7, 3)) {
+      h_(Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, 3)) {
   if (!inputs_) throw std::invalid_argument("road-free roll plane: no inputs");
   const std::vector<std::string> expected{"u1", "u2", "v1", "v2", "gyro_x"};
   const auto& names = inputs_->names();
@@ -132,7 +132,7 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
       !std::equal(names.begin(), names.end(), expected.begin())) {
     throw std::invalid_argument("road-free roll plane: inputs must be u1 u2 v1 v2 [gyro_x]");
   }
-  h_.bottomRows(3).setIdentity();
+  h_.middleRows(4, 3).setIdentity();  // accel_y accel_z gyro_x
   constants(Eigen::MatrixXd(nominal_vector_));  // refuses what it does not model
   // With tare the record weighs the load (inputNoiseBySample): the springs'
   // force at the nominal vehicle, summed over the samples as they come.
@@ -250,8 +250,9 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
           outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
                   gyro_before, out);
         });
-    Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(7, 7);
-    covariance.bottomRightCorner(3, 3) = v;
+    Eigen::MatrixXd covariance =
+        Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, RollPlaneModel::kChannels);
+    covariance.block(4, 4, 3, 3) = v;
     return covariance;
   };
 }
@@ -260,7 +261,7 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
   return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
-                                 inputs_->samples(), 7);
+                                 inputs_->samples(), RollPlaneModel::kChannels);
 }
 
 }  // namespace pc_ekf
