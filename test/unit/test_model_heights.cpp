@@ -10,6 +10,7 @@
 #include "pc_ekf/model/horizontal_motion.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/roll_plane_model.h"
+#include "pc_ekf/model/roll_plane_road_free.h"
 
 namespace pc_ekf {
 namespace {
@@ -238,6 +239,77 @@ TEST(RollPlaneHeights, ImuReadsTheTurnAndItsHeight) {
   EXPECT_NEAR(high_t(kAccelY, 0) - low_t(kAccelY, 0), -0.3 * roll_acc, 1e-5);
   EXPECT_NEAR(high_t(kAccelZ, 0) - low_t(kAccelZ, 0), -0.3 * low_t(kGyroX, 0) * low_t(kGyroX, 0),
               1e-10);
+}
+
+// Road-free: the model on a road turns on a rough surface with heights, a bar
+// and a high IMU; its clean travels, gyro, speed and yaw rate drive the
+// road-free model, whose IMU outputs match the model's (the road-free
+// equations are the same body's, with the travels as inputs).
+TEST(RollPlaneHeights, RoadFreeReproducesTheModelInATurn) {
+  for (const ZeroConvention zero : {ZeroConvention::kTare, ZeroConvention::kRest}) {
+    VehicleParameters p = elevated(280.0, 0.90);
+    p.imu_height = 0.10;
+    CourseSegment turn;
+    turn.type = CourseSegment::Type::kSlalom;
+    turn.duration = 3.0;
+    turn.speed_kmh = 50.0;
+    turn.manoeuvre.lateral_acceleration = 3.5;
+    turn.manoeuvre.frequency = 0.5;
+    turn.manoeuvre.rough = true;
+    turn.iso8608.road_class = 'B';
+    const RollPlaneModel full(p, std::make_shared<CourseRoad>(std::vector<CourseSegment>{turn}),
+                              {zero, true});
+    const auto batch = full.prepare(p.toVector());
+    Eigen::ArrayXXd y = batch->initialState();
+    const IntegratorSettings is{2.5e-4, IntegrationMethod::kRk4};
+    std::vector<double> times;
+    std::vector<std::vector<double>> in(7);
+    std::vector<double> accel_y, accel_z, gyro;
+    double t = 0.0;
+    for (int k = 1; k <= 500; ++k) {
+      const double tk = k * 0.005;
+      integrate(full, *batch, t, tk, y, is);
+      t = tk;
+      times.push_back(tk);
+      for (int c = 0; c < 4; ++c) in[c].push_back(y(8 + c, 0));
+      in[4].push_back(y(kGyroX, 0));
+      in[5].push_back(y(15, 0));  // speed
+      in[6].push_back(y(16, 0));  // gyro_z
+      accel_y.push_back(y(kAccelY, 0));
+      accel_z.push_back(y(kAccelZ, 0));
+      gyro.push_back(y(kGyroX, 0));
+    }
+    auto inputs = std::make_shared<ReadingInputs>(
+        std::vector<std::string>{"u1", "u2", "v1", "v2", "gyro_x", "speed", "gyro_z"}, times, in);
+    const RollPlaneRoadFreeModel free(p, inputs, zero);
+    EXPECT_TRUE(free.channelIsInput(7));
+    EXPECT_TRUE(free.channelIsInput(8));
+    const auto fb = free.prepare(p.toVector());
+    double worst_y = 0.0, worst_z = 0.0, worst_gyro = 0.0, swing = 0.0;
+    for (std::size_t k = 0; k < times.size(); ++k) {
+      Eigen::ArrayXXd r = fb->initialState();
+      fb->readings(times[k], r);
+      worst_y = std::max(worst_y, std::abs(r(0, 0) - accel_y[k]));
+      worst_z = std::max(worst_z, std::abs(r(1, 0) - accel_z[k]));
+      worst_gyro = std::max(worst_gyro, std::abs(r(2, 0) - gyro[k]));
+      swing = std::max(swing, std::abs(accel_y[k]));
+    }
+    EXPECT_GT(swing, 3.0);        // the slalom's a_y
+    EXPECT_LT(worst_y, 5e-3);     // the gyro's integral by trapezoids
+    EXPECT_LT(worst_z, 5e-3);     // cos(phi) of the dynamic roll
+    EXPECT_LT(worst_gyro, 2e-3);  // the increment's trapezoid over 5 ms
+    // Without speed and yaw rate the road-free model misses a_y: accel_y off by metres/s^2.
+    std::vector<std::vector<double>> no_turn(in.begin(), in.begin() + 5);
+    const RollPlaneRoadFreeModel blind(
+        p,
+        std::make_shared<ReadingInputs>(std::vector<std::string>{"u1", "u2", "v1", "v2", "gyro_x"},
+                                        times, no_turn),
+        zero);
+    const auto bb = blind.prepare(p.toVector());
+    Eigen::ArrayXXd r = bb->initialState();
+    bb->readings(times[150], r);  // a quarter period into the slalom: a_y at its peak
+    EXPECT_GT(std::abs(r(0, 0) - accel_y[150]), 2.0);
+  }
 }
 
 }  // namespace
