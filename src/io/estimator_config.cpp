@@ -86,6 +86,37 @@ void readIsoClass(YamlMapReader& r, char& road_class) {
   road_class = text[0];
 }
 
+// A manoeuvre segment's keys (turn, lane_change, slalom: road_input.h's
+// ManoeuvreSettings), driven at speed_kmh on a flat road or on an ISO 8608 one
+// (surface: iso8608, with an iso8608 segment's keys and defaults).
+void readManoeuvre(YamlMapReader& e, const RoadConfig& road, std::size_t index,
+                   CourseSegment& seg) {
+  ManoeuvreSettings& m = seg.manoeuvre;
+  seg.speed_kmh = road.speed_kmh;
+  e.number("speed_kmh", seg.speed_kmh, 0.0, 1000.0, true);
+  e.number("lateral_acceleration", m.lateral_acceleration, -kInf, kInf);
+  if (seg.type == CourseSegment::Type::kTurn) {
+    e.number("radius", m.radius, -kInf, kInf);
+    e.number("ramp", m.ramp, 0.0, kInf);
+  }
+  if (seg.type == CourseSegment::Type::kSlalom) e.number("frequency", m.frequency, 0.0, kInf, true);
+  std::string surface = "flat";
+  e.text("surface", surface);
+  if (surface != "flat" && surface != "iso8608") {
+    e.fail("surface", "'" + surface + "'", "flat or iso8608");
+  }
+  m.rough = surface == "iso8608";
+  if (!m.rough) return;
+  seg.iso8608 = road.iso8608;
+  seg.iso8608.seed = road.iso8608.seed + index;  // mod 2^64
+  if (!(road.iso8608.lead_in > 0.0)) {
+    e.fail("surface", "iso8608", "road.iso8608.lead_in > 0 (the road blends in over it)");
+  }
+  readIsoClass(e, seg.iso8608.road_class);
+  e.unsignedInteger("seed", seg.iso8608.seed);
+  e.number("correlation", seg.iso8608.correlation, 0.0, 1.0);
+}
+
 // Segments default to the road.speed_bump / road.sine settings; an iso8608
 // segment to road.iso8608 and road.speed_kmh, its seed to road.iso8608.seed
 // plus its index in the course (so that segments are not copies).
@@ -126,8 +157,15 @@ std::vector<CourseSegment> readCourse(YamlMapReader& r, const RoadConfig& road) 
       e.unsignedInteger("seed", seg.iso8608.seed);
       e.number("correlation", seg.iso8608.correlation, 0.0, 1.0);
       duration();
+    } else if (type == "turn" || type == "lane_change" || type == "slalom") {
+      seg.type = type == "turn"          ? CourseSegment::Type::kTurn
+                 : type == "lane_change" ? CourseSegment::Type::kLaneChange
+                                         : CourseSegment::Type::kSlalom;
+      readManoeuvre(e, road, i, seg);
+      duration();
     } else {
-      e.fail("type", "'" + type + "'", "speed_bump, sine, rest or iso8608");
+      e.fail("type", "'" + type + "'",
+             "speed_bump, sine, rest, iso8608, turn, lane_change or slalom");
     }
     e.finish();
     out.push_back(seg);

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "pc_ekf/model/course_motion.h"
 #include "pc_ekf/model/road_profile.h"
 
 namespace pc_ekf {
@@ -135,7 +136,8 @@ CourseRoad::CourseRoad(std::vector<CourseSegment> segments) {
       d = speedBumpDuration(seg.speed_bump);
     } else if (seg.type == CourseSegment::Type::kSine) {
       roads_.push_back(std::make_unique<SineRoad>(seg.sine));
-    } else if (seg.type == CourseSegment::Type::kIso8608) {
+    } else if (seg.type == CourseSegment::Type::kIso8608 ||
+               (seg.isManoeuvre() && seg.manoeuvre.rough)) {
       const std::string who = "CourseRoad: segment " + std::to_string(i) + " (iso8608)";
       if (!(seg.speed_kmh > 0.0) || !std::isfinite(seg.speed_kmh)) {
         throw std::invalid_argument(who + ": speed_kmh must be finite and > 0");
@@ -163,6 +165,7 @@ CourseRoad::CourseRoad(std::vector<CourseSegment> segments) {
     // every other segment the level it started from.
     level_.push_back(blends ? roads_.back()->height(d) : level_.back());
   }
+  motion_ = std::make_shared<CourseMotion>(segments, start_);
 }
 
 Eigen::Vector2d CourseRoad::height(double t) const {
@@ -189,6 +192,7 @@ std::vector<double> CourseRoad::breakpoints(double t0, double t1) const {
   for (double b : start_) {
     if (b > t0 && b < t1) out.push_back(b);
   }
+  for (double b : motion_->breakpoints(t0, t1)) out.push_back(b);  // a turn's ramps
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;

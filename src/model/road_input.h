@@ -9,6 +9,8 @@
 
 namespace pc_ekf {
 
+class HorizontalMotion;
+
 // The road under any number of contacts (a model's contact names, in order).
 class ContactRoad {
  public:
@@ -20,6 +22,9 @@ class ContactRoad {
   // Times in the open interval (t0, t1) where the input has a kink; the
   // integrator stops there so its order holds across them.
   virtual std::vector<double> breakpoints(double t0, double t1) const = 0;
+  // The vehicle's horizontal motion on this drive (turns, braking), when the
+  // drive has one; null: straight at constant speed (horizontal_motion.h).
+  virtual const HorizontalMotion* horizontalMotion() const { return nullptr; }
 };
 
 // A road under two contacts (the roll plane's tyres).
@@ -93,15 +98,37 @@ struct Iso8608Settings {
   double lead_in = 2.0;  // m
 };
 
+// A lateral manoeuvre (course segments turn, lane_change, slalom), driven at
+// the segment's speed_kmh; a_y left positive (DRIVING.md §2, §7):
+//  - turn: a_y = lateral_acceleration (or V^2 / radius when radius != 0),
+//    reached and left over `ramp` s by half-cosines;
+//  - lane_change: one period of a_y = lateral_acceleration sin(2 pi t / duration)
+//    (out to one side and straight again: a lane's offset, ISO 3888-1-like);
+//  - slalom: a_y = lateral_acceleration sin(2 pi frequency t).
+// The road under it: flat (the level where the segment before left it) or,
+// rough, the ISO 8608 road of the segment's iso8608 settings (as an iso8608
+// segment).
+struct ManoeuvreSettings {
+  double lateral_acceleration = 3.0;  // m/s^2: the turn's, the peak of the others
+  double radius = 0.0;                // turn, m, left positive; 0: lateral_acceleration
+  double ramp = 1.0;                  // turn, s
+  double frequency = 0.5;             // slalom, Hz
+  bool rough = false;                 // surface iso8608 (else flat)
+};
+
 // One piece of a course road; durations in s.
 struct CourseSegment {
-  enum class Type { kSpeedBump, kSine, kRest, kIso8608 };
+  enum class Type { kSpeedBump, kSine, kRest, kIso8608, kTurn, kLaneChange, kSlalom };
   Type type = Type::kRest;
   SpeedBumpSettings speed_bump;
   SineSettings sine;
-  Iso8608Settings iso8608;  // iso8608 segment: its profile
-  double speed_kmh = 36.0;  // iso8608 segment: driving speed
-  double duration = 0.0;  // sine, rest and iso8608; a speed bump lasts until both tyres are past it
+  Iso8608Settings iso8608;  // iso8608 segment (and a rough manoeuvre): its profile
+  ManoeuvreSettings manoeuvre;  // turn, lane_change, slalom
+  double speed_kmh = 36.0;  // iso8608 segment and manoeuvres: driving speed
+  double duration = 0.0;  // all but a speed bump, which lasts until both tyres are past it
+  bool isManoeuvre() const {
+    return type == Type::kTurn || type == Type::kLaneChange || type == Type::kSlalom;
+  }
 };
 
 // Segments played one after another, each in its own time from 0 (a sine
@@ -141,11 +168,15 @@ class CourseRoad : public RoadInput {
   const std::vector<Eigen::Vector2d>& levels() const { return level_; }
   // Time for both tyres to be past the bump (its last corner).
   static double speedBumpDuration(const SpeedBumpSettings& s);
+  // The drive's horizontal motion when a segment is a manoeuvre (null
+  // otherwise: the course is driven straight, a_y = 0).
+  const HorizontalMotion* horizontalMotion() const override { return motion_.get(); }
  private:
   std::vector<std::unique_ptr<RoadInput>> roads_;  // null for rest
   std::vector<bool> blends_;   // iso8608: the road blends from its level itself
   std::vector<double> start_;  // one per segment, then the course's end
   std::vector<Eigen::Vector2d> level_;  // one per segment, then the one after the course
+  std::shared_ptr<const HorizontalMotion> motion_;
 };
 
 // A sampled series under any number of contacts, linearly

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "pc_ekf/model/domain_message.h"
+#include "pc_ekf/model/horizontal_motion.h"
 #include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
@@ -20,6 +21,10 @@ struct RollPlaneReadings {
   Eigen::ArrayXd roll_static;       // phi_s = -theta_s (REP 103)
   Eigen::ArrayXd rest_y, rest_z;    // subtracted: g sin(phi_s), g cos(phi_s) (rest); 0 (tare)
   Eigen::ArrayXXd travel_offset;    // 2 x Q, subtracted from u_i: 0 (rest); sag (tare)
+  // Heights or a horizontal motion (docs/models.md): the IMU's height z_I, and
+  // whether the channels take the lateral acceleration and z_I terms.
+  Eigen::ArrayXd imu_height;
+  bool elevated = false;
 };
 
 namespace {
@@ -38,6 +43,12 @@ struct ConstantPointers {
   const double *cg, *rear_arm, *cg_ratio;             // D, L - D, D / L
   const double *inv_length;                           // 1 / L
   const double *roll_static, *cos_static, *sin_static;  // theta_s, cos and sin of it
+  // Heights, anti-roll bar, lateral acceleration (docs/models.md).
+  const double *bar;             // k_a
+  const double *first_moment;    // S = m h_b + M h_M
+  const double *static_moment;   // S g tan(phi_s)
+  const double *gravity;
+  const double *transfer;        // Delta F_y / a_y = ((m + M) h_P + sum m_t r_w) / L
 };
 
 // The constants in one Q x kCount table (one allocation per prepare()).
@@ -45,7 +56,8 @@ struct PointConstants : PointConstantTable {
   enum Column {
     kK = 0, kK3 = 2, kThreeDelta = 4, kThreeDeltaSq = 6, kDamping = 8, kTyre = 10,
     kInvUnsprung = 12, kInvTotalMass = 14, kRollGain, kCg, kRearArm, kCgRatio, kInvLength,
-    kRollStatic, kCosStatic, kSinStatic, kCount
+    kRollStatic, kCosStatic, kSinStatic, kBar, kFirstMoment, kStaticMoment, kGravity, kTransfer,
+    kCount
   };
   explicit PointConstants(Eigen::Index q) : PointConstantTable(q, kCount) {}
   ConstantPointers pointers() const {
@@ -69,6 +81,11 @@ struct PointConstants : PointConstantTable {
     p.roll_static = col(kRollStatic);
     p.cos_static = col(kCosStatic);
     p.sin_static = col(kSinStatic);
+    p.bar = col(kBar);
+    p.first_moment = col(kFirstMoment);
+    p.static_moment = col(kStaticMoment);
+    p.gravity = col(kGravity);
+    p.transfer = col(kTransfer);
     return p;
   }
 };
@@ -114,6 +131,49 @@ inline void pointDerivatives(const ConstantPointers& c, Eigen::Index q, double t
   d[5 * d_stride] = a.body[1];
   d[6 * d_stride] = a.wheel[0];
   d[7 * d_stride] = a.wheel[1];
+}
+
+// One point with heights, an anti-roll bar or a lateral acceleration a_y
+// (docs/models.md): the bar's forces -k_a (u1 - u2) on the left end and
+// +k_a (u1 - u2) on the right (the opposite on the unsprung masses),
+//   (m + M) a_P = f_1 + f_2,
+//   J phi'' = cos(phi) (D f_1 - (L - D) f_2 - S g tan(phi_s)) + S (a_y cos(phi) + (g + a_P) sin(phi)),
+// phi = -(theta_s + theta) (REP 103), and the links' load transfer +-Delta F_y
+// on the unsprung masses. The library cos and sin: this path is not the hot
+// loop of the paper's cases. Returns phi''.
+template <DamperLaw law>
+inline double elevatedPointDerivatives(const ConstantPointers& c, Eigen::Index q,
+                                       double tanh_rate, double road0, double road1,
+                                       double lateral, const double* s, Eigen::Index s_stride,
+                                       double* d, Eigen::Index d_stride) {
+  double f[2];
+  for (int i = 0; i < 2; ++i) {
+    const double u = s[i * s_stride] - s[(2 + i) * s_stride];
+    const double v = s[(4 + i) * s_stride] - s[(6 + i) * s_stride];
+    f[i] = -springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q], c.three_delta_sq[i][q]) -
+           damperForce<law>(c.damping[i][q], tanh_rate, v);
+  }
+  const double twist = c.bar[q] * ((s[0] - s[2 * s_stride]) - (s[s_stride] - s[3 * s_stride]));
+  f[0] -= twist;
+  f[1] += twist;
+  const double angle = c.roll_static[q] + (s[s_stride] - s[0]) * c.inv_length[q];  // -phi
+  const double cos_phi = std::cos(angle), sin_phi = -std::sin(angle);
+  const double a_p = (f[0] + f[1]) * c.inv_total_mass[q];
+  const double moment =
+      cos_phi * (c.cg[q] * f[0] - c.rear_arm[q] * f[1] - c.static_moment[q]) +
+      c.first_moment[q] * (lateral * cos_phi + (c.gravity[q] + a_p) * sin_phi);
+  // roll_gain = L / J; x2'' - x1'' = -L phi''.
+  const double rel = -c.roll_gain[q] * moment;
+  const double a1 = a_p - rel * c.cg_ratio[q];
+  const double transfer = c.transfer[q] * lateral;
+  for (int i = 0; i < 4; ++i) d[i * d_stride] = s[(4 + i) * s_stride];
+  d[4 * d_stride] = a1;
+  d[5 * d_stride] = a1 + rel;
+  d[6 * d_stride] =
+      (c.tyre[0][q] * (road0 - s[2 * s_stride]) - f[0] + transfer) * c.inv_unsprung[0][q];
+  d[7 * d_stride] =
+      (c.tyre[1][q] * (road1 - s[3 * s_stride]) - f[1] - transfer) * c.inv_unsprung[1][q];
+  return -rel * c.inv_length[q];
 }
 
 // All points, structure of arrays: y and d hold state variable s of point q at
@@ -188,14 +248,18 @@ __attribute__((target_clones("arch=x86-64-v3", "default"))) bool soaDerivativesD
 
 class RollPlaneBatch : public ModelBatch {
  public:
+  // elevated: heights, a bar or a horizontal motion at some point (the
+  // general right-hand side for every point).
   RollPlaneBatch(PointConstants c, DamperLaw law, double tanh_rate,
-                 std::shared_ptr<const ContactRoad> road,
+                 std::shared_ptr<const ContactRoad> road, bool elevated,
                  std::unique_ptr<RollPlaneReadings> readings = nullptr)
       : c_(std::move(c)),
         p_(c_.pointers()),
         law_(law),
         tanh_rate_(tanh_rate),
         road_(std::move(road)),
+        motion_(road_->horizontalMotion()),
+        elevated_(elevated),
         r_(std::move(readings)) {}
   RollPlaneBatch(const RollPlaneBatch&) = delete;
   RollPlaneBatch& operator=(const RollPlaneBatch&) = delete;
@@ -204,12 +268,13 @@ class RollPlaneBatch : public ModelBatch {
 
   Eigen::ArrayXXd initialState() const override {
     // The equilibrium (docs/method.md §1.4), and its readings.
-    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(r_ ? 15 : 8, pointCount());
+    Eigen::ArrayXXd y = Eigen::ArrayXXd::Zero(r_ ? 8 + RollPlaneModel::kChannels : 8, pointCount());
     if (r_) readings(0.0, y);
     return y;
   }
 
-  // Rows 8..14: u1 u2 v1 v2 accel_y accel_z gyro_x (docs/method.md §1.6).
+  // Rows 8..16: u1 u2 v1 v2 accel_y accel_z gyro_x (docs/method.md §1.6), speed
+  // gyro_z (the motion's, the same at every point).
   void readings(double t, Eigen::ArrayXXd& y) const override {
     if (!r_) return;
     const Eigen::Index n = pointCount();
@@ -217,6 +282,9 @@ class RollPlaneBatch : public ModelBatch {
     dynamic = y.topRows(8);
     derivatives(t, dynamic, rates);
     const RollPlaneReadings& r = *r_;
+    const HorizontalState drive = motion_ ? motion_->at(t) : HorizontalState();
+    y.row(15).setConstant(drive.speed);
+    y.row(16).setConstant(drive.yaw_rate);
     for (Eigen::Index q = 0; q < n; ++q) {
       for (int i = 0; i < 2; ++i) {
         y(8 + i, q) = y(i, q) - y(2 + i, q) - r.travel_offset(i, q);
@@ -226,9 +294,18 @@ class RollPlaneBatch : public ModelBatch {
       const double a = (1.0 - r.imu_fraction[q]) * rates(4, q) + r.imu_fraction[q] * rates(5, q);
       const double phi = r.roll_static[q] - (y(1, q) - y(0, q)) * r.inv_length[q];
       const double specific = r.gravity[q] + a;
+      y(14, q) = -(y(5, q) - y(4, q)) * r.inv_length[q];
+      if (r.elevated) {
+        // docs/models.md: the lateral acceleration and the IMU's height z_I.
+        const double lateral = this->lateral(t);
+        const double roll_acc = -(rates(5, q) - rates(4, q)) * r.inv_length[q];
+        const double z = r.imu_height[q];
+        y(12, q) = lateral * std::cos(phi) + specific * std::sin(phi) - z * roll_acc - r.rest_y[q];
+        y(13, q) = specific * std::cos(phi) - lateral * phi - z * y(14, q) * y(14, q) - r.rest_z[q];
+        continue;
+      }
       y(12, q) = specific * std::sin(phi) - r.rest_y[q];
       y(13, q) = specific * std::cos(phi) - r.rest_z[q];
-      y(14, q) = -(y(5, q) - y(4, q)) * r.inv_length[q];
     }
   }
 
@@ -239,6 +316,10 @@ class RollPlaneBatch : public ModelBatch {
     dydt.resize(8, y.cols());  // no-op when already sized
     Eigen::Vector2d road;
     road_->heights(t, road);
+    if (elevated_) {
+      elevatedDerivatives(t, road, &y(0, 0), 1, y.rows(), &dydt(0, 0), 1, dydt.rows());
+      return;
+    }
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
       if (law_ == DamperLaw::kTanh) {
         pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1,
@@ -261,6 +342,10 @@ class RollPlaneBatch : public ModelBatch {
     dydt.resize(n, 8);  // no-op when already sized
     Eigen::Vector2d road;
     road_->heights(t, road);
+    if (elevated_) {
+      elevatedDerivatives(t, road, y.data(), n, 1, dydt.data(), n, 1);
+      return;
+    }
     const bool beyond_series = soaDerivativesDispatch(p_, law_ == DamperLaw::kTanh, tanh_rate_,
                                                       road[0], road[1], y.data(), dydt.data(), n);
     if (!beyond_series) return;
@@ -279,13 +364,42 @@ class RollPlaneBatch : public ModelBatch {
   }
 
  private:
+  double lateral(double t) const { return motion_ ? motion_->at(t).lateral : 0.0; }
+
+  // Every point by elevatedPointDerivatives: point q's state variable s at
+  // y[s * stride + q * step] (either layout).
+  void elevatedDerivatives(double t, const Eigen::Vector2d& road, const double* y,
+                           Eigen::Index stride, Eigen::Index step, double* d,
+                           Eigen::Index d_stride, Eigen::Index d_step) const {
+    const double a_y = lateral(t);
+    for (Eigen::Index q = 0; q < pointCount(); ++q) {
+      if (law_ == DamperLaw::kTanh) {
+        elevatedPointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], a_y,
+                                                   y + q * step, stride, d + q * d_step, d_stride);
+      } else {
+        elevatedPointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road[0], road[1], a_y,
+                                                     y + q * step, stride, d + q * d_step,
+                                                     d_stride);
+      }
+    }
+  }
+
   PointConstants c_;
   ConstantPointers p_;
   DamperLaw law_;
   double tanh_rate_;
   std::shared_ptr<const ContactRoad> road_;
+  const HorizontalMotion* motion_;  // owned by road_; null: a_y = 0
+  bool elevated_;
   std::unique_ptr<RollPlaneReadings> r_;  // null: readings not kept as states
 };
+
+// Whether a point has heights or an anti-roll bar in its dynamics.
+bool elevatedPoint(const double* p) {
+  const RollPlaneFields<int>& at = rollPlaneRows();
+  return p[at.body_cg_height] != 0.0 || p[at.added_mass_height] != 0.0 ||
+         p[at.anti_roll_bar] != 0.0;
+}
 
 
 }  // namespace
@@ -298,7 +412,7 @@ RollPlaneModel::RollPlaneModel(ModelParameters nominal, std::shared_ptr<const Co
       tanh_rate_(nominal_.settings[rollPlaneRows().damper_tanh_rate]),
       readings_(readings),
       state_names_(rollPlaneDescription().stateNames()),
-      h_(Eigen::MatrixXd::Zero(7, 8)),
+      h_(Eigen::MatrixXd::Zero(kChannels, 8)),
       road_(std::move(road)) {
   // Tare offsets depend on each point's parameters: readings as states.
   if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
@@ -309,8 +423,8 @@ RollPlaneModel::RollPlaneModel(ModelParameters nominal, std::shared_ptr<const Co
     for (const std::string& c : rollPlaneDescription().channelNames()) {
       state_names_.push_back("reading_" + c);
     }
-    h_ = Eigen::MatrixXd::Zero(7, 15);
-    h_.rightCols(7).setIdentity();
+    h_ = Eigen::MatrixXd::Zero(kChannels, 8 + kChannels);
+    h_.rightCols(kChannels).setIdentity();
     return;
   }
   // u_i = x_i - xr_i, v_i = xidot - xridot (docs/method.md §1.6); the IMU
@@ -348,7 +462,9 @@ std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd
   // A negative added mass can still make the combined inertia non-positive.
   const double cg = (mass * pos + m * 0.5 * length) / (mass + m);
   const double inertia = params[at.bar_inertia] + m * (0.5 * length - cg) * (0.5 * length - cg) +
-                         mass * (cg - pos) * (cg - pos);
+                         mass * (cg - pos) * (cg - pos) +
+                         m * params[at.body_cg_height] * params[at.body_cg_height] +
+                         mass * params[at.added_mass_height] * params[at.added_mass_height];
   if (!(inertia > 0.0)) {
     return outOfDomain(names[at.added_mass], mass,
                        "makes the inertia about the combined centre <= 0");
@@ -375,6 +491,8 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
   PointConstants c(count);
   using C = PointConstants;
   const double scale = damper_ == DamperLaw::kTanh ? tanh_scale_ : 1.0;
+  const HorizontalMotion* motion = road_->horizontalMotion();
+  bool elevated = motion && motion->accelerates();
   for (int q = 0; q < count; ++q) {
     const double* p = &params(0, q);
     const StaticEquilibrium& e = equilibria[q];
@@ -392,9 +510,17 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
     }
     // I_cg = I + m (L/2 - D)^2 + M (D - d_CG)^2 (docs/method.md §1.4).
     const double position = p[at.added_mass_position];
-    const double inertia = p[at.bar_inertia] +
-                           p[at.bar_mass] * (0.5 * length - cg) * (0.5 * length - cg) +
-                           p[at.added_mass] * (cg - position) * (cg - position);
+    double inertia = p[at.bar_inertia] +
+                     p[at.bar_mass] * (0.5 * length - cg) * (0.5 * length - cg) +
+                     p[at.added_mass] * (cg - position) * (cg - position);
+    // J = I_cg + m h_b^2 + M h_M^2, S = m h_b + M h_M (docs/models.md).
+    const double moment = p[at.bar_mass] * p[at.body_cg_height] +
+                          p[at.added_mass] * p[at.added_mass_height];
+    if (elevatedPoint(p)) {
+      elevated = true;
+      inertia += p[at.bar_mass] * p[at.body_cg_height] * p[at.body_cg_height] +
+                 p[at.added_mass] * p[at.added_mass_height] * p[at.added_mass_height];
+    }
     c(q, C::kInvTotalMass) = 1.0 / total;
     c(q, C::kRollGain) = length / inertia;
     c(q, C::kCg) = cg;
@@ -407,10 +533,21 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
     const double cos_static = 1.0 / std::sqrt(1.0 + slope * slope);
     c(q, C::kCosStatic) = cos_static;
     c(q, C::kSinStatic) = slope * cos_static;
+    c(q, C::kBar) = p[at.anti_roll_bar];
+    c(q, C::kFirstMoment) = moment;
+    c(q, C::kStaticMoment) = -moment * p[at.gravity] * slope;  // tan(phi_s) = -slope
+    c(q, C::kGravity) = p[at.gravity];
+    c(q, C::kTransfer) = (total * p[at.mount_height] +
+                          (p[at.unsprung_mass[0]] + p[at.unsprung_mass[1]]) * p[at.wheel_radius]) /
+                         length;
   }
   std::unique_ptr<RollPlaneReadings> r;
-  if (readings_.as_states) r = readingConstants(params, equilibria);
-  return std::make_unique<RollPlaneBatch>(std::move(c), damper_, tanh_rate_, road_, std::move(r));
+  if (readings_.as_states) {
+    r = readingConstants(params, equilibria);
+    r->elevated = elevated || (r->imu_height != 0.0).any();
+  }
+  return std::make_unique<RollPlaneBatch>(std::move(c), damper_, tanh_rate_, road_, elevated,
+                                          std::move(r));
 }
 
 std::unique_ptr<RollPlaneReadings> RollPlaneModel::readingConstants(
@@ -424,6 +561,7 @@ std::unique_ptr<RollPlaneReadings> RollPlaneModel::readingConstants(
   r->roll_static.resize(count);
   r->rest_y.resize(count);
   r->rest_z.resize(count);
+  r->imu_height.resize(count);
   r->travel_offset = Eigen::ArrayXXd::Zero(2, count);
   const bool tare = readings_.zero == ZeroConvention::kTare;
   std::vector<StaticEquilibrium> empty;
@@ -438,6 +576,7 @@ std::unique_ptr<RollPlaneReadings> RollPlaneModel::readingConstants(
     const StaticEquilibrium& e = equilibria[static_cast<std::size_t>(q)];
     r->imu_fraction[q] = p[at.imu_position] / p[at.bar_length];
     r->inv_length[q] = 1.0 / p[at.bar_length];
+    r->imu_height[q] = p[at.imu_height];
     r->gravity[q] = p[at.gravity];
     r->roll_static[q] = -e.roll_angle;
     r->rest_y[q] = tare ? 0.0 : p[at.gravity] * std::sin(-e.roll_angle);

@@ -4,9 +4,11 @@
 //   [x1, x2, xr1, xr2, x1dot, x2dot, xr1dot, xr2dot]
 // Channels: [u1, u2, v1, v2], u_i = x_i - xr_i, v_i = xidot - xridot, then
 // the IMU's [accel_y, accel_z, gyro_x] (REP 103 body axes, roll phi > 0 when
-// the left side rises: phi = -(theta_s + (x2 - x1) / L)). The IMU channels and
-// the tare convention need the readings kept as states (ReadingSettings):
-// then 7 reading rows follow the 8 dynamic states and H selects them.
+// the left side rises: phi = -(theta_s + (x2 - x1) / L)), then the drive's
+// [speed, gyro_z] (the road's horizontal motion). The IMU channels, speed,
+// gyro_z and the tare convention need the readings kept as states
+// (ReadingSettings): then 9 reading rows follow the 8 dynamic states and H
+// selects them.
 #pragma once
 
 #include <memory>
@@ -40,6 +42,14 @@ struct RollPlaneFields {
   T added_mass{};
   T added_mass_position{};
   T imu_position{};  // from the left end
+  // Heights above the mount plane (the roll axis) and the anti-roll bar
+  // (docs/models.md): all 0 is the paper's model.
+  T body_cg_height{};     // h_b
+  T added_mass_height{};  // h_M
+  T mount_height{};       // h_P, the mount plane above the ground
+  T wheel_radius{};       // r_w
+  T imu_height{};         // z_I
+  T anti_roll_bar{};      // k_a, N/m of travel difference
   // Settings.
   T damper_tanh_scale{};  // F_C = c * scale * tanh(rate * v)
   T damper_tanh_rate{};
@@ -103,12 +113,13 @@ class RollPlaneModel : public MechanicalModel {
                  Eigen::ArrayXXd& y) const override;
 
   const std::vector<std::string>& stateNames() const override { return state_names_; }
-  int readingCount() const override { return readings_.as_states ? 7 : 0; }
+  int readingCount() const override { return readings_.as_states ? kChannels : 0; }
   bool channelModelled(int channel) const override {
     return readings_.as_states || channel < kSuspensionChannels;
   }
   ZeroConvention zero() const override { return readings_.zero; }
   static constexpr int kSuspensionChannels = 4;
+  static constexpr int kChannels = 9;  // u1 u2 v1 v2 accel_y accel_z gyro_x speed gyro_z
 
   VehicleParameters nominal() const;  // a typed copy
   const ContactRoad& road() const { return *road_; }

@@ -16,33 +16,62 @@ struct RoadFreeConstants {
     double k[2], k3[2], damping[2], delta_ref[2];
     double inv_total, inv_inertia, cg, rear_arm, imu_arm;
     double roll_static, gravity, rest_y, rest_z;
+    // Heights and bar (docs/models.md): k_a, S = m h_b + M h_M, z_I.
+    double bar, first_moment, imu_height;
   };
   std::vector<Point> points;
   DamperLaw law = DamperLaw::kTanh;
   double tanh_rate = 0.0;
+  // Where the optional inputs are (-1: not read): the gyro, and speed and
+  // yaw rate, whose product is the lateral acceleration a_y.
+  int gyro = -1, speed = -1, yaw = -1;
+  // Some point has heights, a bar or an IMU height, or a_y is read: the
+  // general outputs (else the paper's, bit for bit).
+  bool elevated = false;
 };
 
 namespace {
 
-constexpr int kU1 = 0, kV1 = 2, kGyro = 4;
+constexpr int kU1 = 0, kV1 = 2, kMaxInputs = 7;  // u1 u2 v1 v2 [gyro_x] [speed gyro_z]
 
-// phi'' and g + a at the IMU for inputs `in` (u1 u2 v1 v2 [gyro]) and the
-// roll since rest `roll`.
+// a_y = speed x yaw rate from the inputs (0 when they are not read).
+double lateralOf(const RoadFreeConstants& c, const double* in) {
+  return c.speed < 0 ? 0.0 : in[c.speed] * in[c.yaw];
+}
+
+// phi'' and g + a at the IMU for inputs `in` and the roll since rest `roll`.
+// With heights, bar or a_y (docs/models.md): the bar's force k_a (x1 - x2)
+// on the left end (x the compressions), minus it on the right, and
+// J phi'' = cos(phi) (D F_1 - (L - D) F_2) + S (a_y cos(phi) + (g + a_P) sin(phi))
+// with the total forces F_i (their static part carries the S g tan(phi_s)).
 double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Point& p,
                         const double* in, double roll, double* specific) {
-  double f[2];
+  double f[2], x[2];
   for (int i = 0; i < 2; ++i) {
-    const double x = p.delta_ref[i] - in[kU1 + i];  // spring compression
+    x[i] = p.delta_ref[i] - in[kU1 + i];  // spring compression
     const double v = in[kV1 + i];
     const double damper = c.law == DamperLaw::kTanh
                               ? damperForce<DamperLaw::kTanh>(p.damping[i], c.tanh_rate, v)
                               : damperForce<DamperLaw::kLinear>(p.damping[i], c.tanh_rate, v);
-    f[i] = p.k[i] * x + p.k3[i] * x * x * x - damper;
+    f[i] = p.k[i] * x[i] + p.k3[i] * x[i] * x[i] * x[i] - damper;
   }
-  const double theta_dd =
-      std::cos(p.roll_static + roll) * (p.rear_arm * f[1] - p.cg * f[0]) * p.inv_inertia;
-  *specific = (f[0] + f[1]) * p.inv_total + p.imu_arm * theta_dd;
-  return -theta_dd;
+  if (!c.elevated) {
+    const double theta_dd =
+        std::cos(p.roll_static + roll) * (p.rear_arm * f[1] - p.cg * f[0]) * p.inv_inertia;
+    *specific = (f[0] + f[1]) * p.inv_total + p.imu_arm * theta_dd;
+    return -theta_dd;
+  }
+  const double twist = p.bar * (x[0] - x[1]);
+  f[0] += twist;
+  f[1] -= twist;
+  const double phi = p.roll_static + roll, cos_phi = std::cos(phi);
+  const double specific_p = (f[0] + f[1]) * p.inv_total;  // g + a_P
+  const double phi_dd =
+      (cos_phi * (p.cg * f[0] - p.rear_arm * f[1]) +
+       p.first_moment * (lateralOf(c, in) * cos_phi + specific_p * std::sin(phi))) *
+      p.inv_inertia;
+  *specific = specific_p - p.imu_arm * phi_dd;
+  return phi_dd;
 }
 
 // The three outputs (accel_y, accel_z, gyro_x) of one point at t, from the
@@ -56,9 +85,16 @@ void outputs(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, cons
   const double phi_dd_before =
       before_at_rest ? 0.0 : rollAcceleration(c, p, before, roll_before, &specific_before);
   const double phi = p.roll_static + roll;
+  out[2] = gyro_before + 0.5 * (phi_dd + phi_dd_before) * dt;
+  if (c.elevated) {
+    // The tilted a_y and the IMU's height z_I (phi' the gyro read, when it is).
+    const double a_y = lateralOf(c, now), rate = c.gyro < 0 ? 0.0 : now[c.gyro];
+    out[0] = a_y * std::cos(phi) + specific * std::sin(phi) - p.imu_height * phi_dd - p.rest_y;
+    out[1] = specific * std::cos(phi) - a_y * phi - p.imu_height * rate * rate - p.rest_z;
+    return;
+  }
   out[0] = specific * std::sin(phi) - p.rest_y;
   out[1] = specific * std::cos(phi) - p.rest_z;
-  out[2] = gyro_before + 0.5 * (phi_dd + phi_dd_before) * dt;
 }
 
 class RoadFreeBatch : public ModelBatch {
@@ -80,12 +116,13 @@ class RoadFreeBatch : public ModelBatch {
     return y;
   }
   void readings(double t, Eigen::ArrayXXd& y) const override { readingsShifted(t, 0.0, y); }
-  // The suspension's inputs at t - shift; the gyro, the roll integrated from
-  // it and the previous sample's instant on the IMU's clock (t).
+  // The suspension's inputs (and speed and yaw rate, which drive the body) at
+  // t - shift; the gyro, the roll integrated from it and the previous
+  // sample's instant on the IMU's clock (t).
   void readingsShifted(double t, double shift, Eigen::ArrayXXd& y) const override {
-    const int n = in_->count();
-    const bool gyro = n > kGyro;
-    double now[5] = {0, 0, 0, 0, 0}, before[5] = {0, 0, 0, 0, 0};
+    const int gyro_at = c_->gyro;
+    const bool gyro = gyro_at >= 0;
+    double now[kMaxInputs] = {}, before[kMaxInputs] = {};
     in_->at(t - shift, now);
     const double t_before = in_->previousTime(t);
     const bool at_rest = !(t_before > 0.0);
@@ -93,13 +130,13 @@ class RoadFreeBatch : public ModelBatch {
     if (!at_rest) {
       in_->at(t_before - shift, before);
       if (gyro) {
-        double own[5] = {0, 0, 0, 0, 0};
+        double own[kMaxInputs] = {};
         if (shift != 0.0) in_->at(t_before, own);
-        gyro_before = shift != 0.0 ? own[kGyro] : before[kGyro];
+        gyro_before = shift != 0.0 ? own[gyro_at] : before[gyro_at];
       }
     }
-    const double roll = gyro ? in_->integral(kGyro, t) : 0.0;
-    const double roll_before = gyro && !at_rest ? in_->integral(kGyro, t_before) : 0.0;
+    const double roll = gyro ? in_->integral(gyro_at, t) : 0.0;
+    const double roll_before = gyro && !at_rest ? in_->integral(gyro_at, t_before) : 0.0;
     double out[3];
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
       outputs(*c_, c_->points[static_cast<std::size_t>(q)], now, before, at_rest, t - t_before,
@@ -124,15 +161,29 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
       zero_(zero),
       nominal_vector_(nominal.toVector()),
       state_names_{"reading_accel_y", "reading_accel_z", "reading_gyro_x"},
-      h_(Eigen::MatrixXd::Zero(7, 3)) {
+      h_(Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, 3)) {
   if (!inputs_) throw std::invalid_argument("road-free roll plane: no inputs");
-  const std::vector<std::string> expected{"u1", "u2", "v1", "v2", "gyro_x"};
-  const auto& names = inputs_->names();
-  if (names.size() < 4 || names.size() > 5 ||
-      !std::equal(names.begin(), names.end(), expected.begin())) {
-    throw std::invalid_argument("road-free roll plane: inputs must be u1 u2 v1 v2 [gyro_x]");
+  // u1 u2 v1 v2, then gyro_x, speed and gyro_z when read (speed with gyro_z).
+  const std::vector<std::string> suspension{"u1", "u2", "v1", "v2"};
+  std::vector<std::string> names = inputs_->names();
+  const auto position = [&](const std::string& name) {
+    const auto it = std::find(names.begin(), names.end(), name);
+    return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+  };
+  gyro_ = position("gyro_x");
+  speed_ = position("speed");
+  yaw_ = position("gyro_z");
+  std::vector<std::string> expected = suspension;
+  if (gyro_ >= 0) expected.push_back("gyro_x");
+  if (speed_ >= 0 || yaw_ >= 0) {
+    expected.push_back("speed");
+    expected.push_back("gyro_z");
   }
-  h_.bottomRows(3).setIdentity();
+  if (names != expected) {
+    throw std::invalid_argument(
+        "road-free roll plane: inputs must be u1 u2 v1 v2 [gyro_x] [speed gyro_z]");
+  }
+  h_.middleRows(4, 3).setIdentity();  // accel_y accel_z gyro_x
   // With tare the record weighs the load (inputNoiseBySample): the springs'
   // force at the nominal vehicle, summed over the samples as they come.
   if (zero_ == ZeroConvention::kTare) {
@@ -150,7 +201,11 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
 
 bool RollPlaneRoadFreeModel::channelModelled(int channel) const {
   if (channel == 5) return true;  // accel_z needs the suspension readings only
-  return (channel == 4 || channel == 6) && inputs_->count() > kGyro;  // the gyro's integral
+  return (channel == 4 || channel == 6) && gyro_ >= 0;  // the gyro's integral
+}
+
+bool RollPlaneRoadFreeModel::channelIsInput(int channel) const {
+  return channel < 4 || (speed_ >= 0 && (channel == kSpeedChannel || channel == kYawChannel));
 }
 
 std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
@@ -166,6 +221,10 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
     }
   }
   const RollPlaneFields<int>& at = rollPlaneRows();
+  c->gyro = gyro_;
+  c->speed = speed_;
+  c->yaw = yaw_;
+  c->elevated = speed_ >= 0;
   const std::vector<StaticEquilibrium> loaded = solveStaticEquilibria(params);
   const bool tare = zero_ == ZeroConvention::kTare;
   std::vector<StaticEquilibrium> unloaded;
@@ -188,8 +247,16 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
                             : e.spring_compression[i];
     }
     const double position = p[at.added_mass_position];
-    const double inertia = p[at.bar_inertia] + p[at.bar_mass] * (0.5 * L - cg) * (0.5 * L - cg) +
-                           p[at.added_mass] * (cg - position) * (cg - position);
+    double inertia = p[at.bar_inertia] + p[at.bar_mass] * (0.5 * L - cg) * (0.5 * L - cg) +
+                     p[at.added_mass] * (cg - position) * (cg - position);
+    const double h_b = p[at.body_cg_height], h_m = p[at.added_mass_height];
+    a.bar = p[at.anti_roll_bar];
+    a.first_moment = p[at.bar_mass] * h_b + p[at.added_mass] * h_m;
+    a.imu_height = p[at.imu_height];
+    if (h_b != 0.0 || h_m != 0.0 || a.bar != 0.0 || a.imu_height != 0.0) {
+      c->elevated = true;
+      inertia += p[at.bar_mass] * h_b * h_b + p[at.added_mass] * h_m * h_m;  // J
+    }
     a.inv_total = 1.0 / total;
     a.inv_inertia = 1.0 / inertia;
     a.cg = cg;
@@ -228,19 +295,21 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
                                  4.0 * std::max(vehicle[added], vehicle[m]), vehicle[added]);
   }
   std::shared_ptr<const RoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
-  const std::vector<int> integrated = n > kGyro ? std::vector<int>{kGyro} : std::vector<int>{};
-  return [c, integrated, absolute, relative, n, inputs = inputs_](std::size_t k) {
+  const int gyro = gyro_;
+  const std::vector<int> integrated = gyro >= 0 ? std::vector<int>{gyro} : std::vector<int>{};
+  return [c, integrated, absolute, relative, gyro, inputs = inputs_](std::size_t k) {
     const RoadFreeConstants::Point& p = c->points.front();
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 3,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
             double* out) {
-          const double gyro_before = n > kGyro ? before[kGyro] : 0.0;
+          const double gyro_before = gyro >= 0 ? before[gyro] : 0.0;
           outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
                   gyro_before, out);
         });
-    Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(7, 7);
-    covariance.bottomRightCorner(3, 3) = v;
+    Eigen::MatrixXd covariance =
+        Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, RollPlaneModel::kChannels);
+    covariance.block(4, 4, 3, 3) = v;
     return covariance;
   };
 }
@@ -249,7 +318,7 @@ Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
   return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
-                                 inputs_->samples(), 7);
+                                 inputs_->samples(), RollPlaneModel::kChannels);
 }
 
 }  // namespace pc_ekf

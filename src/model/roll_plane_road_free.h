@@ -3,7 +3,11 @@
 // and the IMU sees how it answers. Road, tyres and unsprung masses drop out.
 //
 // Inputs (ReadingInputs, in this order): u1 u2 v1 v2, then gyro_x when the
-// record has it. Outputs, kept as reading states: accel_y, accel_z, gyro_x.
+// record has it, then speed and gyro_z when it has them (a_y = speed gyro_z).
+// Outputs, kept as reading states: accel_y, accel_z, gyro_x. Heights, the
+// anti-roll bar and a_y as in the model on a road (docs/models.md): the bar's
+// force from the travels, the elevated masses' S a_y and S (g + a_P) sin(phi)
+// moments, and the IMU's a_y and z_I terms.
 //   F_i = F_K(delta_ref,i - u_i) - F_C(v_i), delta_ref the spring's compression
 //     at the zero of the readings (tare: the empty vehicle; rest: the loaded);
 //   g + a_cg = (F_1 + F_2) / (m + M);
@@ -41,7 +45,7 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
   const std::vector<std::string>& stateNames() const override { return state_names_; }
   int readingCount() const override { return 3; }
   bool channelModelled(int channel) const override;
-  bool channelIsInput(int channel) const override { return channel < 4; }
+  bool channelIsInput(int channel) const override;
   ZeroConvention zero() const override { return zero_; }
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
@@ -73,6 +77,8 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
   std::vector<std::string> state_names_;
   Eigen::MatrixXd h_;
   int spring_force_sum_ = -1;  // tare: ReadingInputs::sampleSum's handle
+  int gyro_ = -1, speed_ = -1, yaw_ = -1;  // the optional inputs' places (-1: not read)
+  static constexpr int kSpeedChannel = 7, kYawChannel = 8;
 };
 
 }  // namespace pc_ekf

@@ -29,7 +29,7 @@ class RollPlaneType : public ModelType {
                                                     zero);
   }
   RoadFreeInputs roadFreeInputs() const override {
-    return {{"u1", "u2", "v1", "v2"}, {"gyro_x"}};
+    return {{"u1", "u2", "v1", "v2"}, {"gyro_x", "speed", "gyro_z"}};
   }
   std::string equilibriumSummary(const ModelParameters& laws,
                                  const Eigen::VectorXd& values) const override {

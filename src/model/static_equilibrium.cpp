@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include "pc_ekf/model/roll_plane_model.h"
 #include "pc_ekf/model/smooth_functions.h"
@@ -69,6 +70,62 @@ void springCompressions(const double* k, const double* k3, const double* w, doub
   }
 }
 
+// Heights or an anti-roll bar (docs/models.md): the loads W_i (spring plus
+// bar) depend on the tilt, t = tan(phi_s) = (h_1 - h_2) / L, through the
+// elevated masses' first moment S, and the bar couples the springs. Newton on
+// (delta_1, delta_2, t) from the solution without them, for the equations
+//   F_K1(d1) + k_a (d1 - d2) = W_1(t),  F_K2(d2) - k_a (d1 - d2) = W_2(t),
+//   L t = h_1 - h_2,  h_i = -(d_i + (W_i + m_ti g) / k_ti),
+// W_1 = g (m + M) (L - D) / L - g S t / L and W_2 = g (m + M) - W_1, i.e.
+// sum W_i = g (m + M) and (W_1 - W_2) L / 2 = g (M y_M - S t).
+void solveWithHeights(const double* p, StaticEquilibrium& e) {
+  const RollPlaneFields<int>& at = rollPlaneRows();
+  const double g = p[at.gravity], length = p[at.bar_length], bar = p[at.anti_roll_bar];
+  const double moment =
+      p[at.bar_mass] * p[at.body_cg_height] + p[at.added_mass] * p[at.added_mass_height];
+  const double weight = (p[at.bar_mass] + p[at.added_mass]) * g;
+  const double shift = g * moment / length;  // dW_2/dt
+  double w[2];
+  const auto loads = [&](double t) {
+    w[0] = weight * (length - e.combined_cg) / length - shift * t;
+    w[1] = weight * e.combined_cg / length + shift * t;
+  };
+  Eigen::Vector3d x(e.spring_compression[0], e.spring_compression[1],
+                    (e.height[0] - e.height[1]) / length);
+  bool converged = false;
+  for (int it = 0; it < 100 && !converged; ++it) {
+    loads(x[2]);
+    double force[2], slope[2], height[2];
+    for (int i = 0; i < 2; ++i) {
+      const double k = p[at.spring_linear[i]], k3 = p[at.spring_cubic[i]], d = x[i];
+      force[i] = k * d + k3 * d * d * d;
+      slope[i] = k + 3.0 * k3 * d * d;
+      height[i] = -(d + (w[i] + p[at.unsprung_mass[i]] * g) / p[at.tyre_stiffness[i]]);
+    }
+    const double twist = bar * (x[0] - x[1]);
+    const Eigen::Vector3d r(force[0] + twist - w[0], force[1] - twist - w[1],
+                            length * x[2] - (height[0] - height[1]));
+    Eigen::Matrix3d j;
+    j << slope[0] + bar, -bar, shift, -bar, slope[1] + bar, -shift, 1.0, -1.0,
+        length - shift * (1.0 / p[at.tyre_stiffness[0]] + 1.0 / p[at.tyre_stiffness[1]]);
+    const Eigen::Vector3d step = j.partialPivLu().solve(r);
+    x -= step;
+    if (!x.allFinite()) break;
+    // Quadratic convergence: a step of 1e-14 (m; rad) leaves round-off.
+    converged = step.cwiseAbs().maxCoeff() <= 1e-14;
+  }
+  if (!converged) {
+    throw std::runtime_error(
+        "static equilibrium: Newton did not converge with heights and anti-roll bar (S = " +
+        std::to_string(moment) + " kg m, k_a = " + std::to_string(bar) + " N/m)");
+  }
+  loads(x[2]);
+  for (int i = 0; i < 2; ++i) {
+    e.spring_compression[i] = x[i];
+    e.load[i] = w[i];  // spring plus bar: what the unsprung mass carries
+  }
+}
+
 }  // namespace
 
 std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& params) {
@@ -102,6 +159,15 @@ std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& para
       const double tyre =
           (e.load[i] + p[at.unsprung_mass[i]] * p[at.gravity]) / p[at.tyre_stiffness[i]];
       e.height[i] = -(e.spring_compression[i] + tyre);
+    }
+    const bool elevated = p[at.body_cg_height] != 0.0 || p[at.added_mass_height] != 0.0;
+    if (elevated || p[at.anti_roll_bar] != 0.0) {
+      solveWithHeights(p, e);
+      for (int i = 0; i < 2; ++i) {
+        e.height[i] =
+            -(e.spring_compression[i] +
+              (e.load[i] + p[at.unsprung_mass[i]] * p[at.gravity]) / p[at.tyre_stiffness[i]]);
+      }
     }
     e.roll_angle = std::atan((e.height[1] - e.height[0]) / p[at.bar_length]);
     if (!std::isfinite(e.roll_angle)) {

@@ -162,7 +162,7 @@ TEST(JointStateConversion, MeasurementToJointStateAndBack) {
   EXPECT_TRUE(back.problems.empty());
   expectChannels(back.measurement, {0, 3}, {0.012, -0.5});
 
-  m.channels = {7};  // beyond the roll plane's 7 channels
+  m.channels = {9};  // beyond the roll plane's 9 channels
   m.values = Eigen::VectorXd::Ones(1);
   EXPECT_THROW(jointStateFromMeasurement(m, stamp), std::invalid_argument);
 }

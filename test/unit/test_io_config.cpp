@@ -308,7 +308,7 @@ TEST(Config, BadValuesAreRefusedNamingTheKey) {
             std::string::npos);
   EXPECT_NE(errorOf(std::string("truth: {xi: [1.5, 0]}\n") + kMinimal).find("truth.xi[0]"),
             std::string::npos);
-  EXPECT_NE(errorOf("uncertain:\n  - {name: wheel_radius, relative_range: 0.1}\n")
+  EXPECT_NE(errorOf("uncertain:\n  - {name: wheel_base, relative_range: 0.1}\n")
                 .find("uncertain[0].name"),
             std::string::npos);
   EXPECT_NE(errorOf(std::string("vehicle: {added_mass_position: 2.0}\n") + kMinimal)

@@ -27,7 +27,8 @@ const char* kDefaults =
     "  - {name: added_mass_position, relative_range: 0.25}\n";
 
 // Every branch that reads keys of its own: tolerances (number and map), a
-// course of each segment type (speed_bump, sine, rest, iso8608), a truth
+// course of each segment type (speed_bump, sine, rest, iso8608, turn,
+// lane_change, slalom), a truth
 // road, vehicle and schedule (xi and values).
 const char* kBranches =
     "uncertain:\n"
@@ -43,6 +44,9 @@ const char* kBranches =
     "    - {type: sine, duration: 1.0}\n"
     "    - {type: rest, duration: 1.0}\n"
     "    - {type: iso8608, duration: 1.0, speed_kmh: 54.0, class: C, seed: 7, correlation: 0.5}\n"
+    "    - {type: turn, duration: 2.0, radius: -30.0, ramp: 0.5}\n"
+    "    - {type: lane_change, duration: 2.0, lateral_acceleration: 4.0, surface: iso8608}\n"
+    "    - {type: slalom, duration: 2.0, frequency: 0.5}\n"
     "truth:\n"
     "  vehicle: {bar_mass: 590.0}\n"
     "  road: {source: sine}\n"
@@ -86,7 +90,9 @@ std::string tablePath(const std::string& read_path) {
   // A course segment's own rows; the other keys are road.speed_bump's or road.sine's.
   static const std::set<std::string> segment_rows = {
       "road.course[i].type",  "road.course[i].duration", "road.course[i].speed_kmh",
-      "road.course[i].class", "road.course[i].seed",     "road.course[i].correlation"};
+      "road.course[i].class", "road.course[i].seed",     "road.course[i].correlation",
+      "road.course[i].lateral_acceleration", "road.course[i].radius", "road.course[i].ramp",
+      "road.course[i].frequency", "road.course[i].surface"};
   if (after("road.course[i].") && !segment_rows.count(p)) {
     return "road.course[i].<speed_bump or sine key>";
   }

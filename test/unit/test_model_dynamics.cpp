@@ -15,6 +15,8 @@
 namespace pc_ekf {
 namespace {
 
+const int kRows = static_cast<int>(rollPlaneDescription().parameters().size());
+
 Eigen::VectorXd paramsAt(const RollPlaneModel& model, double xi1, double xi2) {
   Eigen::VectorXd v = model.nominalParameters();
   v[14] = 200.0 * (1.0 + 0.5 * xi1);
@@ -55,7 +57,7 @@ double channelDiff(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b, int c, in
 TEST(RollPlaneDynamics, SpeedBumpConvergesWithFourthOrder) {
   const RollPlaneModel model(VehicleParameters(),
                              std::make_shared<SpeedBumpRoad>(SpeedBumpSettings()));
-  Eigen::MatrixXd params(17, 3);
+  Eigen::MatrixXd params(kRows, 3);
   params.col(0) = paramsAt(model, 0.0, 0.0);
   params.col(1) = paramsAt(model, 0.2326, -0.3875);  // docs/method.md §1.6 truth
   params.col(2) = paramsAt(model, 1.0, 1.0);
@@ -103,7 +105,7 @@ Eigen::MatrixXd sampledChannelsDp5(const RollPlaneModel& model, const Eigen::Mat
 TEST(RollPlaneDynamics, DormandPrinceConvergesWithFifthOrder) {
   const RollPlaneModel model(VehicleParameters(),
                              std::make_shared<SpeedBumpRoad>(SpeedBumpSettings()));
-  Eigen::MatrixXd params(17, 3);
+  Eigen::MatrixXd params(kRows, 3);
   params.col(0) = paramsAt(model, 0.0, 0.0);
   params.col(1) = paramsAt(model, 0.2326, -0.3875);
   params.col(2) = paramsAt(model, 1.0, 1.0);
@@ -141,7 +143,7 @@ TEST(RollPlaneDynamics, ZeroRoadKeepsEquilibriumExactly) {
           std::vector<std::vector<double>>(2, std::vector<double>(4, 0.0)));
     }
     const RollPlaneModel model(VehicleParameters(), road);
-    params.resize(17, 3);
+    params.resize(kRows, 3);
     params.col(0) = paramsAt(model, 0.0, 0.0);
     params.col(1) = paramsAt(model, 1.0, 1.0);  // tilted equilibrium, theta_s != 0
     params.col(2) = paramsAt(model, -0.8, -0.9);
@@ -159,7 +161,7 @@ TEST(RollPlaneDynamics, UnitStepRoadSettlesAtStaticOffset) {
       VehicleParameters(),
       std::make_shared<SampledRoad>(std::vector<double>{0.0},
                                     std::vector<std::vector<double>>{{0.01}, {0.01}}));
-  Eigen::MatrixXd params(17, 1);
+  Eigen::MatrixXd params(kRows, 1);
   params.col(0) = paramsAt(model, 0.6, 0.4);
   const auto batch = model.prepare(params);
   Eigen::ArrayXXd y = batch->initialState();
@@ -171,7 +173,7 @@ TEST(RollPlaneDynamics, UnitStepRoadSettlesAtStaticOffset) {
 Eigen::MatrixXd randomColumns(const RollPlaneModel& model, int count) {
   std::mt19937 rng(20080601);
   std::uniform_real_distribution<double> xi(-1.0, 1.0), factor(0.8, 1.2);
-  Eigen::MatrixXd params(17, count);
+  Eigen::MatrixXd params(kRows, count);
   for (int q = 0; q < count; ++q) {
     params.col(q) = paramsAt(model, xi(rng), xi(rng));
     params(3, q) *= factor(rng);  // damping_left

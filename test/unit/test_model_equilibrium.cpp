@@ -75,13 +75,15 @@ TEST(StaticEquilibrium, NonFiniteInputThrows) {
 
 TEST(VehicleParametersVector, OrderAndRoundTrip) {
   const RollPlaneModel model = makeModel();
-  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 17u);
+  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 23u);
   EXPECT_EQ(model.parameterIndex("bar_mass"), 0);
   EXPECT_EQ(model.parameterIndex("spring_cubic_right"), 8);
   EXPECT_EQ(model.parameterIndex("gravity"), 13);
   EXPECT_EQ(model.parameterIndex("added_mass"), 14);
   EXPECT_EQ(model.parameterIndex("added_mass_position"), 15);
   EXPECT_EQ(model.parameterIndex("imu_position"), 16);
+  EXPECT_EQ(model.parameterIndex("body_cg_height"), 17);  // the heights and bar after them
+  EXPECT_EQ(model.parameterIndex("anti_roll_bar"), 22);
   EXPECT_EQ(model.parameterIndex("no_such_parameter"), -1);
 
   VehicleParameters p = at(0.3, 0.7);
@@ -138,7 +140,7 @@ TEST(InvalidReason, NamesTheOffendingParameter) {
 
 TEST(InvalidReason, PrepareRejectsInadmissibleColumn) {
   const RollPlaneModel model = makeModel();
-  Eigen::MatrixXd params(17, 2);
+  Eigen::MatrixXd params(model.nominalParameters().size(), 2);
   params.col(0) = model.nominalParameters();
   params.col(1) = model.nominalParameters();
   params(15, 1) = 2.0;

@@ -49,7 +49,7 @@ TEST(RollPlaneReadings, LinearModelCannotGiveImuChannels) {
   EXPECT_TRUE(linear.channelModelled(3));
   EXPECT_FALSE(linear.channelModelled(4));
   const RollPlaneModel tare(VehicleParameters(), bump(), {ZeroConvention::kTare, false});
-  EXPECT_EQ(tare.stateSize(), 15);  // tare keeps the readings as states by itself
+  EXPECT_EQ(tare.stateSize(), 17);  // tare keeps the readings as states by itself
   EXPECT_EQ(tare.stateNames()[8 + 6], "reading_gyro_x");
   EXPECT_TRUE(tare.channelModelled(6));
 }
