@@ -10,7 +10,9 @@ namespace pc_ekf {
 
 ParameterMapping::ParameterMapping(const MechanicalModel& model,
                                    std::vector<UncertainParameter> uncertain)
-    : nominal_full_(model.nominalParameters()), uncertain_(std::move(uncertain)) {
+    : nominal_full_(model.nominalParameters()),
+      model_names_(model.parameterNames()),
+      uncertain_(std::move(uncertain)) {
   for (const auto& u : uncertain_) {
     const int i = model.parameterIndex(u.name);
     if (i < 0) throw std::invalid_argument("uncertain parameter '" + u.name + "' is not a model parameter");

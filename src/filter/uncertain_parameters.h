@@ -29,6 +29,9 @@ class ParameterMapping {
   const std::vector<UncertainParameter>& uncertain() const { return uncertain_; }
   std::vector<GermSpec> germs() const;
   std::vector<std::string> names() const;
+  // The model's full parameter vector: its names and nominal (configured) values.
+  const std::vector<std::string>& modelParameterNames() const { return model_names_; }
+  const Eigen::VectorXd& nominalParameters() const { return nominal_full_; }
 
   // theta (count x Q) -> full model parameters (model parameters x Q), the
   // others at their nominal values.
@@ -59,6 +62,7 @@ class ParameterMapping {
 
  private:
   Eigen::VectorXd nominal_full_;
+  std::vector<std::string> model_names_;
   std::vector<int> index_;  // row of each uncertain parameter in the full vector
   std::vector<UncertainParameter> uncertain_;
 };

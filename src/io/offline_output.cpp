@@ -80,6 +80,17 @@ std::string toJson(const OfflineResult& r) {
                                {"xi_mean", p.xi_mean},
                                {"xi_stddev", p.xi_stddev}});
   }
+  // Vehicles with heights (docs/tools.md): the rollover outputs, PC
+  // expansions of the same germs as the parameters'; absent otherwise.
+  if (!r.derived.empty()) {
+    j["derived"] = Json::array();
+    for (const DerivedSummary& d : r.derived) {
+      j["derived"].push_back({{"name", d.name},
+                              {"mean", d.mean},
+                              {"stddev", d.stddev},
+                              {"coefficients", numberList(d.coefficients)}});
+    }
+  }
   j["coherence"] = {{"available", r.coherence.available},
                     {"decimation", r.coherence.decimation},
                     {"disagreement", numberList(r.coherence.disagreement)},
@@ -189,6 +200,17 @@ void OfflineOutputs::finish(const OfflineResult& r) {
     for (Eigen::Index b = 0; b < h.densities.size(); ++b) {
       text += r.parameters[i].name;
       for (double v : {h.edges[b], h.edges[b + 1], h.densities[b]}) {
+        text += ',';
+        appendG17(text, v);
+      }
+      text += '\n';
+    }
+  }
+  // The derived quantities' PDFs after the parameters' (vehicles with heights).
+  for (const DerivedSummary& d : r.derived) {
+    for (Eigen::Index b = 0; b < d.pdf.densities.size(); ++b) {
+      text += d.name;
+      for (double v : {d.pdf.edges[b], d.pdf.edges[b + 1], d.pdf.densities[b]}) {
         text += ',';
         appendG17(text, v);
       }

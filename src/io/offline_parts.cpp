@@ -1,5 +1,6 @@
 #include "pc_ekf/io/offline_parts.h"
 
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/pc/in_parts.h"
 
@@ -26,6 +27,22 @@ std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::Matr
   const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();  // also when not finite
   if (!coeffs.allFinite()) return {};
   return s->histograms(coeffs, machineThreads());
+}
+
+void summariseDerived(const EstimatorConfig& c, const ParameterMapping& mapping,
+                      const PolynomialBasis& basis, const Eigen::MatrixXd& coeffs,
+                      OfflineResult* r) {
+  r->derived.clear();
+  const DerivedExpansions d = rolloverExpansions(mapping, basis, coeffs);
+  if (d.empty()) return;  // no heights: the JSON and pdfs.csv as without them
+  const Eigen::VectorXd mean = pcMean(d.coefficients), sd = pcStddev(d.coefficients);
+  for (std::size_t i = 0; i < d.names.size(); ++i) {
+    const Eigen::Index k = static_cast<Eigen::Index>(i);
+    DerivedSummary s{d.names[i], mean[k], sd[k], d.coefficients.row(k).transpose(), {}};
+    // The parameters' draws when they share them (pdf.shared_draws), else the first seed.
+    s.pdf = pcHistogram(basis, s.coefficients, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+    r->derived.push_back(std::move(s));
+  }
 }
 
 void give(SampleRecord record, SampleSink* sink, OfflineResult* r) {

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/offline_result.h"
 #include "pc_ekf/pc/pdf_sampler.h"
@@ -23,6 +24,12 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
 using PdfSamplerFuture = std::shared_future<std::shared_ptr<const ParameterPdfSampler>>;
 PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis);
 std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs);
+
+// The rollover outputs of the final expansion (r->derived; none without
+// heights or coefficients), each with its PDF from pdf's draws and bins.
+void summariseDerived(const EstimatorConfig& c, const ParameterMapping& mapping,
+                      const PolynomialBasis& basis, const Eigen::MatrixXd& coeffs,
+                      OfflineResult* r);
 
 // A record to the sink (when there is one); the result keeps the last.
 void give(SampleRecord record, SampleSink* sink, OfflineResult* r);

@@ -47,6 +47,15 @@ struct ParameterSummary {
   double mean = 0.0, stddev = 0.0, xi_mean = 0.0, xi_stddev = 0.0;
 };
 
+// A quantity derived from the parameters (the rollover outputs,
+// filter/rollover_quantities.h): its PC expansion, mean, std and PDF.
+struct DerivedSummary {
+  std::string name;
+  double mean = 0.0, stddev = 0.0;
+  Eigen::VectorXd coefficients;  // S terms
+  Histogram pdf;                 // parameter units; empty when not drawn
+};
+
 struct CoherenceCheck {
   bool available = false;
   int decimation = 0;
@@ -74,6 +83,9 @@ struct OfflineResult {
   SampleRecord last_record;
   std::vector<std::string> loo_channels;  // one-step: the channels of SampleRecord::loo_error
   std::vector<Histogram> pdfs;  // final, one per parameter (parameter units)
+  // Final derived quantities (cg_height...: vehicles with heights and a PC
+  // expansion only; empty otherwise).
+  std::vector<DerivedSummary> derived;
   CoherenceCheck coherence;
   int nis_window_violations = 0;
   PredictiveCheck predictive;   // batch methods, grid and EnKF (health.predictive_check)

@@ -256,6 +256,7 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
   setParameters(msg, propagator->mapping(), b.mean, b.stddev);
   setBasis(msg, propagator->basis());
   setCoefficients(msg, b.coefficients);
+  setRolloverOutputs(msg, propagator->mapping(), propagator->basis(), b.coefficients);
   msg.nis = b.nis;
   msg.nis_channels = static_cast<std::uint32_t>(b.observations);
   msg.band_nested = true;

@@ -289,6 +289,30 @@ void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients
   if (coefficients.size() > 0) msg.term_count = static_cast<std::uint32_t>(cols);
 }
 
+void setDerived(ParameterEstimate& msg, const DerivedExpansions& d) {
+  msg.derived_names = d.names;
+  if (d.empty()) {
+    msg.derived_mean.clear();
+    msg.derived_stddev.clear();
+    msg.derived_coefficients.clear();
+    return;
+  }
+  msg.derived_mean = toStd(pcMean(d.coefficients));
+  msg.derived_stddev = toStd(pcStddev(d.coefficients));
+  const Eigen::Index rows = d.coefficients.rows(), cols = d.coefficients.cols();
+  msg.derived_coefficients.resize(d.coefficients.size());
+  for (Eigen::Index i = 0; i < rows; ++i) {
+    for (Eigen::Index j = 0; j < cols; ++j) {
+      msg.derived_coefficients[i * cols + j] = d.coefficients(i, j);
+    }
+  }
+}
+
+void setRolloverOutputs(ParameterEstimate& msg, const ParameterMapping& mapping,
+                        const PolynomialBasis& basis, const Eigen::MatrixXd& coefficients) {
+  setDerived(msg, rolloverExpansions(mapping, basis, coefficients));
+}
+
 void setRates(ParameterEstimate& msg, const SafeguardRates& r, double window) {
   msg.rate_window = window;
   msg.rate_names.clear();
@@ -388,6 +412,7 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
                                 std::to_string(basis.size()));
   }
   setCoefficients(msg, result.coefficients);
+  setRolloverOutputs(msg, mapping, basis, result.coefficients);
   setHealth(msg, result.health, result.update.channels, health_settings);
   msg.gated = result.gated;
   msg.rejected_samples = static_cast<std::uint32_t>(std::max(0, result.rejected));
@@ -491,6 +516,21 @@ Eigen::MatrixXd coefficientsOf(const ParameterEstimate& msg) {
   Eigen::MatrixXd c(rows, cols);
   for (std::size_t i = 0; i < rows; ++i) {
     for (std::size_t j = 0; j < cols; ++j) c(i, j) = msg.coefficients[i * cols + j];
+  }
+  return c;
+}
+
+Eigen::MatrixXd derivedCoefficientsOf(const ParameterEstimate& msg) {
+  const std::size_t rows = msg.derived_names.size(), cols = msg.term_count;
+  if (msg.derived_coefficients.size() != rows * cols) {
+    throw std::invalid_argument("ParameterEstimate: " +
+                                std::to_string(msg.derived_coefficients.size()) +
+                                " derived coefficients for " + std::to_string(rows) +
+                                " quantities x " + std::to_string(cols) + " terms");
+  }
+  Eigen::MatrixXd c(rows, cols);
+  for (std::size_t i = 0; i < rows; ++i) {
+    for (std::size_t j = 0; j < cols; ++j) c(i, j) = msg.derived_coefficients[i * cols + j];
   }
   return c;
 }

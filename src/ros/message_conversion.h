@@ -21,6 +21,7 @@
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/model/model_type.h"
 #include "pc_ekf/pc/pc_statistics.h"
@@ -168,6 +169,13 @@ void setBasis(ParameterEstimate& msg, const PolynomialBasis& basis);
 // coefficients (parameters x S) row-major plus term_count; an empty matrix
 // clears them.
 void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients);
+// Derived quantities (derived_* fields; filter/rollover_quantities.h): names,
+// means, stds and row-major coefficients; an empty `d` clears them.
+void setDerived(ParameterEstimate& msg, const DerivedExpansions& d);
+// The rollover outputs of `coefficients` (parameters x S) when the vehicle
+// has heights (none otherwise).
+void setRolloverOutputs(ParameterEstimate& msg, const ParameterMapping& mapping,
+                        const PolynomialBasis& basis, const Eigen::MatrixXd& coefficients);
 // The safeguards' rates (docs/method.md §5.9; empty arrays when not available).
 void setRates(ParameterEstimate& msg, const SafeguardRates& rates, double window);
 // Health fields of docs/method.md §5 (also sets `healthy` and `warnings`, keeping a
@@ -209,5 +217,7 @@ ParameterPdf pdfMessage(const std::vector<std::string>& names,
 // Coefficients (names.size() x term_count) of a message; throws
 // std::invalid_argument when the array has the wrong size.
 Eigen::MatrixXd coefficientsOf(const ParameterEstimate& msg);
+// The same for derived_coefficients (derived_names.size() x term_count).
+Eigen::MatrixXd derivedCoefficientsOf(const ParameterEstimate& msg);
 
 }  // namespace pc_ekf

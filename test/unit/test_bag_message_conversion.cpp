@@ -289,6 +289,54 @@ TEST(GroundTruthMessage, TrueValuesWithZeroSpread) {
                std::invalid_argument);
 }
 
+// turns.yaml (heights): the derived_* fields carry cg_height, the static
+// stability factor and the rollover threshold; at the prior, cg_height's mean
+// is E over the load's germ of the closed form (the load's height enters
+// linearly and independently: its mean suffices); speed_bump.yaml: none.
+TEST(EstimateMessage, RolloverOutputsWithHeightsOnly) {
+  const EstimatorConfig turns =
+      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/turns.yaml");
+  const auto model = makeModel(turns, makeRoad(turns));
+  const ParameterMapping mapping(*model, turns.uncertain);
+  const PolynomialBasis basis(mapping.germs(), 3);
+  ParameterEstimate msg;
+  setCoefficients(msg, mapping.priorCoefficients(basis));
+  setRolloverOutputs(msg, mapping, basis, mapping.priorCoefficients(basis));
+  ASSERT_EQ(msg.derived_names, (std::vector<std::string>{"cg_height", "static_stability_factor",
+                                                         "rollover_threshold"}));
+  ASSERT_EQ(msg.derived_mean.size(), 3u);
+  ASSERT_EQ(msg.derived_stddev.size(), 3u);
+  const Eigen::MatrixXd c = derivedCoefficientsOf(msg);
+  ASSERT_EQ(c.cols(), basis.size());
+  EXPECT_EQ(c(0, 0), msg.derived_mean[0]);
+  EXPECT_NEAR(msg.derived_stddev[1], c.row(1).tail(c.cols() - 1).norm(), 1e-15);
+  // E[h] over M's Beta(2, 2) germ by a 40-point Gauss rule; h_M at its mean 0.40.
+  const QuadratureRule rule = basis.family(0).gaussRule(40);
+  double mean = 0.0;
+  for (Eigen::Index q = 0; q < rule.nodes.size(); ++q) {
+    const double M = 200.0 * (1.0 + 0.5 * rule.nodes[q]), mu = 2 * 36.26;
+    mean += rule.weights[q] *
+            ((580.0 + M) * 0.40 + 580.0 * 0.25 + M * 0.40 + mu * 0.30) / (580.0 + M + mu);
+  }
+  EXPECT_NEAR(msg.derived_mean[0], mean, 1e-12);
+  EXPECT_GT(msg.derived_stddev[0], 0.005);
+  // rollover_threshold = g SSF term by term (the projection is linear).
+  for (Eigen::Index j = 0; j < c.cols(); ++j) EXPECT_NEAR(c(2, j), 9.81 * c(1, j), 1e-12);
+
+  const EstimatorConfig paper =
+      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml");
+  const auto paper_model = makeModel(paper, makeRoad(paper));
+  const ParameterMapping paper_mapping(*paper_model, paper.uncertain);
+  const PolynomialBasis paper_basis(paper_mapping.germs(), 3);
+  setRolloverOutputs(msg, paper_mapping, paper_basis, paper_mapping.priorCoefficients(paper_basis));
+  EXPECT_TRUE(msg.derived_names.empty());
+  EXPECT_TRUE(msg.derived_mean.empty());
+  EXPECT_TRUE(msg.derived_coefficients.empty());
+  EXPECT_EQ(derivedCoefficientsOf(msg).size(), 0);
+  msg.derived_names = {"cg_height"};  // a malformed message
+  EXPECT_THROW(derivedCoefficientsOf(msg), std::invalid_argument);
+}
+
 TEST(PdfMessage, ConcatenatesHistogramsWithBinCounts) {
   Histogram a, b;
   a.edges = Eigen::Vector3d(0.0, 1.0, 2.0);
