@@ -104,11 +104,36 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
       parameter_coefficients.rows() != mapping.count()) {
     return out;
   }
-  Eigen::MatrixXd nodes;
-  Eigen::VectorXd weights;
-  projectionRule(basis, &nodes, &weights);
+  // The rule and the basis at its nodes, once per basis and thread (the node
+  // projects at every published sample; a sparse grid has thousands of nodes).
+  // Keyed by the basis's content (germs, order, multi-indices).
+  struct Rule {
+    std::vector<GermSpec> germs;
+    int order = -1;
+    std::vector<std::vector<int>> indices;
+    Eigen::MatrixXd psi;  // Q x S
+    Eigen::VectorXd weights;
+  };
+  thread_local Rule rule;
+  const auto same_germs = [&] {
+    if (rule.germs.size() != basis.germs().size()) return false;
+    for (std::size_t i = 0; i < rule.germs.size(); ++i) {
+      const GermSpec &a = rule.germs[i], &b = basis.germs()[i];
+      if (a.family != b.family || a.alpha != b.alpha || a.beta != b.beta) return false;
+    }
+    return true;
+  };
+  if (rule.order != basis.order() || rule.indices != basis.multiIndices() || !same_germs()) {
+    Eigen::MatrixXd nodes;
+    projectionRule(basis, &nodes, &rule.weights);
+    rule.psi = basis.evaluate(nodes);
+    rule.germs = basis.germs();
+    rule.order = basis.order();
+    rule.indices = basis.multiIndices();
+  }
+  const Eigen::MatrixXd& psi = rule.psi;
+  const Eigen::VectorXd& weights = rule.weights;
   // The parameters' values at the nodes (count x Q), then every model value.
-  const Eigen::MatrixXd psi = basis.evaluate(nodes);  // Q x S
   const Eigen::MatrixXd theta = parameter_coefficients * psi.transpose();
   const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
   if (!values.allFinite()) return out;
