@@ -31,7 +31,7 @@ fi
 PC_EKF_APT_PACKAGES=(
   build-essential cmake libeigen3-dev libboost-dev libyaml-cpp-dev libgtest-dev
   libbenchmark-dev ros-core-dev python3-rostest python3-roslaunch python3-rosmaster
-  python3-rosbag rosbash libdiagnostic-updater-dev libnodeletlib-dev libnodeletlib-tools colcon
+  python3-rosbag rosbash libnav-msgs-dev libdiagnostic-updater-dev libnodeletlib-dev libnodeletlib-tools colcon
   python3-colcon-ros python3-matplotlib python3-numpy python3-rospy python3-std-srvs
   python3-tk                     # plot_estimates' live window (matplotlib's TkAgg)
   python3-sensor-msgs python3-diagnostic-msgs  # master_restart_client.py

@@ -238,20 +238,34 @@ void readContactRoad(const std::string& path, BagRecord& record, const RoadRows&
   }
 }
 
-// The IMU channels of every sample by the rule of imu_alignment.h (the
-// node's), its messages read one at a time: each sample is aligned once a
-// reading at or after its stamp is in (as alignImuRecord with every reading,
-// which is what the node does live), and readings no later sample needs go.
-void alignBagImu(const std::string& path, rosbag::Bag& bag, const BagReadOptions& options,
-                 const std::vector<std::int64_t>& stamps, BagRecord& record) {
-  if (record.imu_topic.empty()) {
-    record.warnings.push_back("measurement.channels select IMU channels but " + path +
-                              " has no sensor_msgs/Imu on a topic ending in '" +
-                              options.imu_topic + "': samples without IMU channels");
+// The IMU channels (or, for odom, the speed) of every sample by the rule of
+// imu_alignment.h (the node's), the stream's messages read one at a time:
+// each sample is aligned once a reading at or after its stamp is in (as
+// alignImuRecord with every reading, which is what the node does live), and
+// readings no later sample needs go.
+struct AlignedTopic {
+  const char* what;     // "IMU channels" | "the speed"
+  const char* message;  // "sensor_msgs/Imu" | "nav_msgs/Odometry"
+  const std::string& suffix;
+  const std::string& topic;  // "" = none in the bag
+  int& messages;
+  int& empty;
+  int& problems;
+  ImuAlignmentCounts& counts;
+};
+
+template <class Msg, class Convert>
+void alignBagStream(const std::string& path, rosbag::Bag& bag, double max_gap,
+                    const std::vector<std::int64_t>& stamps, BagRecord& record,
+                    const AlignedTopic& t, Convert convert) {
+  if (t.topic.empty()) {
+    record.warnings.push_back(std::string("measurement.channels select ") + t.what + " but " +
+                              path + " has no " + t.message + " on a topic ending in '" +
+                              t.suffix + "': samples without " + t.what);
     return;
   }
-  ImuAligner aligner(options.imu_max_gap);
-  ImuAlignmentCounts& n = record.imu;
+  ImuAligner aligner(max_gap);
+  ImuAlignmentCounts& n = t.counts;
   std::size_t next = 0;
   const auto alignReady = [&](bool all) {
     for (; next < record.samples.size() && (all || aligner.ready(stamps[next])); ++next) {
@@ -260,16 +274,16 @@ void alignBagImu(const std::string& path, rosbag::Bag& bag, const BagReadOptions
   };
   try {
     // Bag (record) order: the order a live node receives them in.
-    readTopic<sensor_msgs::Imu>(path, bag, record.imu_topic, [&](const sensor_msgs::Imu& msg) {
-      ++record.imu_messages;
-      ImuConversion c = readingFromImu(msg, options.imu);
-      record.imu_problems += static_cast<int>(c.problems.size());
+    readTopic<Msg>(path, bag, t.topic, [&](const Msg& msg) {
+      ++t.messages;
+      ImuConversion c = convert(msg);
+      t.problems += static_cast<int>(c.problems.size());
       for (const auto& p : c.problems) {
-        record.warnings.push_back("'" + record.imu_topic + "' message stamped " +
+        record.warnings.push_back("'" + t.topic + "' message stamped " +
                                   stampText(msg.header.stamp) + ": " + p);
       }
       if (c.empty()) {
-        ++record.imu_empty;
+        ++t.empty;
         return;
       }
       if (!aligner.add(std::move(c.reading))) ++n.readings_refused;
@@ -282,16 +296,36 @@ void alignBagImu(const std::string& path, rosbag::Bag& bag, const BagReadOptions
   }
   alignReady(true);
   if (n.readings_refused > 0) {
-    record.warnings.push_back(std::to_string(n.readings_refused) + " '" + record.imu_topic +
+    record.warnings.push_back(std::to_string(n.readings_refused) + " '" + t.topic +
                               "' message(s) stamped at or before the previous one: not used");
   }
+  const std::string short_name = t.what == std::string("the speed") ? "odom" : "IMU";
   if (n.no_bracket + n.gap > 0) {
-    record.warnings.push_back(std::to_string(n.no_bracket) +
-                              " sample(s) without IMU readings on both sides and " +
-                              std::to_string(n.gap) + " with IMU readings more than " +
-                              std::to_string(options.imu_max_gap) +
-                              " s apart around them (node.imu_max_gap): no IMU channels there");
+    record.warnings.push_back(std::to_string(n.no_bracket) + " sample(s) without " + short_name +
+                              " readings on both sides and " + std::to_string(n.gap) +
+                              " with " + short_name + " readings more than " +
+                              std::to_string(max_gap) +
+                              " s apart around them (node.imu_max_gap): no " + t.what + " there");
   }
+}
+
+void alignBagImu(const std::string& path, rosbag::Bag& bag, const BagReadOptions& options,
+                 const std::vector<std::int64_t>& stamps, BagRecord& record) {
+  const AlignedTopic t{"IMU channels",       "sensor_msgs/Imu",   options.imu_topic,
+                       record.imu_topic,     record.imu_messages, record.imu_empty,
+                       record.imu_problems,  record.imu};
+  alignBagStream<sensor_msgs::Imu>(path, bag, options.imu_max_gap, stamps, record, t,
+                                   [&](const sensor_msgs::Imu& m) { return readingFromImu(m, options.imu); });
+}
+
+void alignBagOdom(const std::string& path, rosbag::Bag& bag, const BagReadOptions& options,
+                  const std::vector<std::int64_t>& stamps, BagRecord& record) {
+  const AlignedTopic t{"the speed",          "nav_msgs/Odometry",  options.odom_topic,
+                       record.odom_topic,    record.odom_messages, record.odom_empty,
+                       record.odom_problems, record.odom};
+  alignBagStream<nav_msgs::Odometry>(
+      path, bag, options.imu_max_gap, stamps, record, t,
+      [&](const nav_msgs::Odometry& m) { return readingFromOdometry(m, options.odom_speed); });
 }
 
 }  // namespace
@@ -408,6 +442,9 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
     if (options.imu.any()) {
       record.imu_topic = findTopic<sensor_msgs::Imu>(path, bag, options.imu_topic, &topics);
     }
+    if (options.odom_speed >= 0) {
+      record.odom_topic = findTopic<nav_msgs::Odometry>(path, bag, options.odom_topic, &topics);
+    }
   } catch (const BagError&) {
     throw;
   } catch (const std::exception& e) {
@@ -458,6 +495,7 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   record.samples = mergeEqualStamps(path, raw, options.joints.channelCount(), &stamps);
   std::vector<StampedSample>().swap(raw);
   if (options.imu.any()) alignBagImu(path, bag, options, stamps, record);
+  if (options.odom_speed >= 0) alignBagOdom(path, bag, options, stamps, record);
   record.ground_truth = std::move(last_truth);
   return record;
 }
@@ -466,6 +504,7 @@ BagReadOptions bagReadOptions(const EstimatorConfig& config) {
   BagReadOptions o;
   o.imu = imuChannels(config.model_type->channelNames(), config.measurement.channels);
   o.imu_max_gap = config.node.imu_max_gap;
+  o.odom_speed = odomSpeedChannel(config.model_type->channelNames(), config.measurement.channels);
   if (config.road.source == RoadSource::kNone) o.road_free_interval = config.sampling.interval();
   if (config.model_type->twoContacts()) return o;
   o.joints = suspensionJoints(*config.model_type, config.node.joint_names);
@@ -515,11 +554,23 @@ void writeBag(const std::string& path, const BagContents& c) {
     std::vector<double> row(c.contacts.size());
     // IMU messages go in before the road and samples of later stamps.
     std::size_t i = 0;
+    // Odometry likewise (after the IMU messages of the same stamp).
+    std::size_t o = 0;
+    const double odom_variance =
+        c.odom_speed >= 0 && static_cast<std::size_t>(c.odom_speed) < c.imu_variances.size()
+            ? c.imu_variances[static_cast<std::size_t>(c.odom_speed)]
+            : 0.0;
     const auto imuUpTo = [&](const ros::Time& stamp) {
       for (; i < c.imu_samples.size(); ++i) {
         const ros::Time at = stampAt(c.origin, c.imu_samples[i].time);
         if (at > stamp) break;
         bag.write(c.imu_topic, at, imuFromMeasurement(c.imu_samples[i], at, c.imu, c.imu_variances));
+      }
+      for (; o < c.odom_samples.size(); ++o) {
+        const ros::Time at = stampAt(c.origin, c.odom_samples[o].time);
+        if (at > stamp) break;
+        bag.write(c.odom_topic, at,
+                  odometryFromMeasurement(c.odom_samples[o], at, c.odom_speed, odom_variance));
       }
     };
     while (r < road_t.size() || s < c.samples.size()) {

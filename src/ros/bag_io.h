@@ -5,6 +5,9 @@
 //   imu/data                 sensor_msgs/Imu          body IMU (when measurement.channels
 //                                                     select IMU channels), aligned to the
 //                                                     samples by alignImuRecord (imu_alignment.h)
+//   odom                     nav_msgs/Odometry        forward speed twist.twist.linear.x (when
+//                                                     measurement.channels select speed),
+//                                                     aligned by the same rule
 //   ground_truth             pc_ekf/ParameterEstimate true values (synthesize_bag only)
 // Topics match on their suffix, so a leading namespace (/car1/road/profile)
 // is accepted. Times are header stamps; t = 0 is the stamp of the first
@@ -38,6 +41,7 @@ constexpr const char* kRoadHeightsTopic = "road/heights";
 constexpr const char* kJointStatesTopic = "suspension/joint_states";
 constexpr const char* kGroundTruthTopic = "ground_truth";
 constexpr const char* kImuTopic = "imu/data";
+constexpr const char* kOdomTopic = "odom";
 
 // True when `topic` is `suffix`, "/" + suffix, or ends in "/" + suffix.
 bool topicMatches(const std::string& topic, const std::string& suffix);
@@ -55,7 +59,10 @@ struct BagReadOptions {
   // IMU channels to read from imu_topic (none: the topic is not read).
   ImuChannels imu;
   std::string imu_topic = kImuTopic;
-  double imu_max_gap = 0.1;  // s (node.imu_max_gap)
+  double imu_max_gap = 0.1;  // s (node.imu_max_gap; also the odom stream's)
+  // The speed channel to read from odom_topic (-1: the topic is not read).
+  int odom_speed = -1;
+  std::string odom_topic = kOdomTopic;
   // Road-free (road.source none, > 0): no road is read, and t = 0 lies this
   // long before the first joint_states stamp, as the node's (the config's
   // sampling interval).
@@ -80,6 +87,10 @@ struct BagRecord {
   std::string imu_topic;
   int imu_messages = 0, imu_empty = 0, imu_problems = 0;
   ImuAlignmentCounts imu;
+  // Odometry (options.odom_speed >= 0): as the IMU's.
+  std::string odom_topic;
+  int odom_messages = 0, odom_empty = 0, odom_problems = 0;
+  ImuAlignmentCounts odom;
 };
 
 // Reads and validates a bag. Throws BagError (naming the file) for a missing,
@@ -126,6 +137,12 @@ struct BagContents {
   ImuChannels imu;
   std::vector<double> imu_variances;
   std::string imu_topic = kImuTopic;
+  // Odometry messages (nav_msgs/Odometry, twist.twist.linear.x = the
+  // channel odom_speed) at the times of odom_samples; the variance from
+  // imu_variances[odom_speed] when given, else the covariance all zero.
+  MeasurementSeries odom_samples;
+  int odom_speed = -1;
+  std::string odom_topic = kOdomTopic;
 };
 
 // Writes (overwrites) an uncompressed bag. Throws BagError naming the file.

@@ -38,6 +38,9 @@ EstimatorDiagnostics::EstimatorDiagnostics(ros::NodeHandle nh, ros::NodeHandle p
   if (imuChannels(config.model_type->channelNames(), config.measurement.channels).any()) {
     updater_.add("imu", this, &EstimatorDiagnostics::reportImu);
   }
+  if (odomSpeedChannel(config.model_type->channelNames(), config.measurement.channels) >= 0) {
+    updater_.add("odom", this, &EstimatorDiagnostics::reportOdom);
+  }
   if (config.safeguards.reopen.mode == ReopenMode::kLoad || config.safeguards.horizon.clock_offset > 0.0 ||
       config.measurement.standstill > 0.0) {
     updater_.add("load and clock", this, &EstimatorDiagnostics::reportLoad);

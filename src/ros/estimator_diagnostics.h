@@ -114,6 +114,11 @@ class EstimatorDiagnostics {
     imu_ = stats;
     imu_now_ = now;
   }
+  // odom (shown under "odom" when measurement.channels select speed).
+  void setOdom(const ImuInputStats& stats, double now) {
+    odom_ = stats;
+    odom_now_ = now;
+  }
   void publish() { updater_.force_update(); }
   double period() { return updater_.getPeriod(); }
 
@@ -124,6 +129,11 @@ class EstimatorDiagnostics {
   void reportUpkeep(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportSensitivity(diagnostic_updater::DiagnosticStatusWrapper& s);
   void reportImu(diagnostic_updater::DiagnosticStatusWrapper& s);  // estimator_diagnostics_imu.cpp
+  void reportOdom(diagnostic_updater::DiagnosticStatusWrapper& s);  // estimator_diagnostics_imu.cpp
+  // The imu or odom status from `i` (names "imu"/"odom", the topic).
+  void reportAligned(diagnostic_updater::DiagnosticStatusWrapper& s, const ImuInputStats& i,
+                     double stats_now, const char* name, const char* topic, ros::WallTime& reported_at,
+                     std::uint64_t& reported_received);
   // Load changes and the clock offset (estimator_diagnostics_load.cpp).
   void reportLoad(diagnostic_updater::DiagnosticStatusWrapper& s);
   std::uint32_t reported_load_changes_ = 0;
@@ -146,6 +156,10 @@ class EstimatorDiagnostics {
   double imu_now_ = 0.0;
   std::uint64_t imu_reported_received_ = 0;
   ros::WallTime imu_reported_at_;
+  ImuInputStats odom_;
+  double odom_now_ = 0.0;
+  std::uint64_t odom_reported_received_ = 0;
+  ros::WallTime odom_reported_at_;
 };
 
 }  // namespace pc_ekf

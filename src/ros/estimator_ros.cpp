@@ -128,6 +128,12 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
     ROS_INFO("%s: IMU channels from %s (aligned to the joint_states stamps)", name_.c_str(),
              nh_.resolveName("imu/data").c_str());
   }
+  if (odomSpeedChannel(config_.model_type->channelNames(), config_.measurement.channels) >= 0) {
+    odom_ = std::make_unique<ImuInput>(config_, AlignedStream::kOdom);
+    odom_sub_ = nh_.subscribe("odom", queue, &EstimatorRos::onOdom, this, hints);
+    ROS_INFO("%s: speed from %s twist.twist.linear.x (aligned to the joint_states stamps)",
+             name_.c_str(), nh_.resolveName("odom").c_str());
+  }
   reset_srv_ = pnh_.advertiseService("reset", &EstimatorRos::onReset, this);
   batch_srv_ = pnh_.advertiseService("estimate_batch", &EstimatorRos::onEstimateBatch, this);
 
@@ -352,7 +358,18 @@ void EstimatorRos::onJointState(const sensor_msgs::JointState::ConstPtr& msg) {
     releaseImu(now);
     return;
   }
-  addSample(msg->header.stamp, conv.measurement, now);
+  addSampleToOdom(msg->header.stamp, conv.measurement, now, now);
+}
+
+void EstimatorRos::addSampleToOdom(const ros::Time& stamp, const Measurement& m, double arrival,
+                                   double now) {
+  if (!odom_) {
+    addSample(stamp, m, arrival);
+    return;
+  }
+  // The odom wait runs from the moment the sample is handed on (after the IMU's).
+  odom_->addSample(stamp, m, now);
+  releaseOdom(now);
 }
 
 void EstimatorRos::addSample(const ros::Time& stamp, const Measurement& m, double arrival) {
@@ -385,12 +402,37 @@ void EstimatorRos::releaseImu(double now) {
   const std::uint64_t expired = imu_->stats().samples_without_imu.count("wait_expired")
                                     ? imu_->stats().samples_without_imu.at("wait_expired")
                                     : 0;
-  for (const ImuReleased& s : imu_->release(now)) addSample(s.stamp, s.measurement, s.arrival);
+  for (const ImuReleased& s : imu_->release(now)) addSampleToOdom(s.stamp, s.measurement, s.arrival, now);
   const auto& without = imu_->stats().samples_without_imu;
   if (without.count("wait_expired") && without.at("wait_expired") > expired) {
     ROS_WARN_THROTTLE(kWarnPeriod,
                       "%s: no imu/data message reached a joint_states stamp within %.3f s "
                       "(node.road_wait_timeout): samples go on without IMU channels",
+                      name_.c_str(), config_.node.road_wait_timeout);
+  }
+}
+
+void EstimatorRos::onOdom(const nav_msgs::Odometry::ConstPtr& msg) {
+  const double now = steadySeconds();
+  const std::string problem = odom_->addOdom(*msg, now);
+  if (!problem.empty()) {
+    ROS_WARN_THROTTLE(kWarnPeriod, "%s: odom stamped %.9f: %s", name_.c_str(),
+                      msg->header.stamp.toSec(), problem.c_str());
+  }
+  releaseOdom(now);
+}
+
+void EstimatorRos::releaseOdom(double now) {
+  const auto expiredOf = [&] {
+    const auto& without = odom_->stats().samples_without_imu;
+    return without.count("wait_expired") ? without.at("wait_expired") : std::uint64_t{0};
+  };
+  const std::uint64_t expired = expiredOf();
+  for (const ImuReleased& s : odom_->release(now)) addSample(s.stamp, s.measurement, s.arrival);
+  if (expiredOf() > expired) {
+    ROS_WARN_THROTTLE(kWarnPeriod,
+                      "%s: no odom message reached a joint_states stamp within %.3f s "
+                      "(node.road_wait_timeout): samples go on without the speed",
                       name_.c_str(), config_.node.road_wait_timeout);
   }
 }
@@ -440,12 +482,14 @@ void EstimatorRos::addRoad(const ros::Time& stamp, const std::vector<double>& he
 
 void EstimatorRos::onWaitTimer(const ros::WallTimerEvent&) {
   if (imu_ && imu_->waiting() > 0) releaseImu(steadySeconds());
+  if (odom_ && odom_->waiting() > 0) releaseOdom(steadySeconds());
   if (timeline_.pendingCount() > 0) processReleased();
 }
 
 void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
   updateRunState();
   if (imu_) diagnostics_.setImu(imu_->stats(), steadySeconds());
+  if (odom_) diagnostics_.setOdom(odom_->stats(), steadySeconds());
   {
     NodeBacklog& b = diagnostics_.backlog();
     std::lock_guard<std::mutex> lock(inbox_mutex_);
@@ -590,6 +634,7 @@ void EstimatorRos::process(const ReleasedSample& sample) {
 bool EstimatorRos::onReset(std_srvs::Trigger::Request&, std_srvs::Trigger::Response& res) {
   const int samples = run_ ? run_->samples() : 0;
   if (imu_) imu_->reset();
+  if (odom_) odom_->reset();
   startRun();
   ++diagnostics_.counters().resets;
   diagnostics_.last() = LastUpdate{};

@@ -62,6 +62,12 @@ class EstimatorRos {
   // imu/data (docs/nodes.md "Clocks"): the samples the IMU alignment releases.
   void onImu(const sensor_msgs::Imu::ConstPtr& msg);
   void releaseImu(double now);
+  // odom (docs/nodes.md "Clocks"): the speed, aligned after the IMU channels.
+  void onOdom(const nav_msgs::Odometry::ConstPtr& msg);
+  void releaseOdom(double now);
+  // A sample with its IMU channels (if any): on to the odom alignment, or to
+  // addSample when the speed is not read.
+  void addSampleToOdom(const ros::Time& stamp, const Measurement& m, double arrival, double now);
   void onRoad(const RoadProfile::ConstPtr& msg);
   void onRoadHeights(const RoadHeights::ConstPtr& msg);
   void addRoad(const ros::Time& stamp, const std::vector<double>& heights, const char* topic);
@@ -101,6 +107,7 @@ class EstimatorRos {
   std::unique_ptr<RoadFreeStream> road_free_;
   std::string road_free_caveat_;  // roadFreeCaveat: every estimate reported not healthy
   std::unique_ptr<ImuInput> imu_;  // null: measurement.channels select no IMU channel
+  std::unique_ptr<ImuInput> odom_;  // null: measurement.channels do not select speed
   std::unique_ptr<EstimatorRun> run_;  // created at the run's first released sample
   std::unique_ptr<PdfWorker> pdf_worker_;  // null: no parameter_pdf
   EstimatorDiagnostics diagnostics_;
@@ -118,7 +125,7 @@ class EstimatorRos {
   ros::CallbackQueue receive_queue_;
   std::unique_ptr<ros::AsyncSpinner> receiver_;
 
-  ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_, imu_sub_;
+  ros::Subscriber joint_state_sub_, road_sub_, road_heights_sub_, imu_sub_, odom_sub_;
   ros::Publisher estimate_pub_, batch_pub_, pdf_pub_;
   ros::ServiceServer reset_srv_, batch_srv_;
   ros::WallTimer wait_timer_, diagnostics_timer_;

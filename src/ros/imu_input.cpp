@@ -10,8 +10,14 @@ std::int64_t ns(const ros::Time& t) { return static_cast<std::int64_t>(t.sec) * 
 
 }  // namespace
 
-ImuInput::ImuInput(const EstimatorConfig& config)
-    : channels_(imuChannels(config.model_type->channelNames(), config.measurement.channels)),
+ImuInput::ImuInput(const EstimatorConfig& config, AlignedStream stream)
+    : channels_(stream == AlignedStream::kImu
+                    ? imuChannels(config.model_type->channelNames(), config.measurement.channels)
+                    : ImuChannels{}),
+      speed_channel_(stream == AlignedStream::kOdom
+                         ? odomSpeedChannel(config.model_type->channelNames(), config.measurement.channels)
+                         : -1),
+      label_(stream == AlignedStream::kImu ? "IMU" : "odom"),
       aligner_(config.node.imu_max_gap),
       timeout_(config.node.road_wait_timeout),
       max_pending_(static_cast<std::size_t>(config.node.max_pending_samples)),
@@ -20,7 +26,16 @@ ImuInput::ImuInput(const EstimatorConfig& config)
 std::string ImuInput::addImu(const sensor_msgs::Imu& msg, double now) {
   ++stats_.received;
   stats_.last_message_wall = now;
-  ImuConversion c = readingFromImu(msg, channels_);
+  return addConversion(readingFromImu(msg, channels_));
+}
+
+std::string ImuInput::addOdom(const nav_msgs::Odometry& msg, double now) {
+  ++stats_.received;
+  stats_.last_message_wall = now;
+  return addConversion(readingFromOdometry(msg, speed_channel_));
+}
+
+std::string ImuInput::addConversion(ImuConversion c) {
   stats_.problems["unknown_covariance"] += static_cast<std::uint64_t>(c.unknown_covariances);
   std::string problem;
   for (std::size_t i = 0; i < c.problems.size(); ++i) {
@@ -29,7 +44,7 @@ std::string ImuInput::addImu(const sensor_msgs::Imu& msg, double now) {
   }
   if (c.empty()) {
     ++stats_.rejected["no_channel"];
-    problem = "no usable IMU channel" + (problem.empty() ? std::string() : ": " + problem);
+    problem = "no usable " + label_ + " channel" + (problem.empty() ? std::string() : ": " + problem);
     stats_.last_problem = problem;
     return problem;
   }
@@ -39,7 +54,7 @@ std::string ImuInput::addImu(const sensor_msgs::Imu& msg, double now) {
       // A looped bag or a restarted clock: alignment starts again.
       ++stats_.rejected["time_jump"];
       problem = "stamp jumped back by " + std::to_string((last_stamp_ns_ - stamp) * 1e-9) +
-                " s: IMU alignment restarted";
+                " s: " + label_ + " alignment restarted";
       aligner_.reset();
       have_last_ = false;
       mean_interval_ = 0.0;
@@ -56,7 +71,7 @@ std::string ImuInput::addImu(const sensor_msgs::Imu& msg, double now) {
     const double interval = (stamp - last_stamp_ns_) * 1e-9;
     if (intervals_ >= 10 && (interval > 2.0 * mean_interval_ || interval < 0.5 * mean_interval_)) {
       ++stats_.rate_changes;
-      problem += (problem.empty() ? "" : "; ") + std::string("IMU interval ") +
+      problem += (problem.empty() ? "" : "; ") + label_ + " interval " +
                  std::to_string(1e3 * interval) + " ms against a mean of " +
                  std::to_string(1e3 * mean_interval_) + " ms (rate change or stop)";
     }

@@ -5,9 +5,13 @@
 // message stamped at or after it has arrived, at most node.road_wait_timeout
 // of wall clock and node.max_pending_samples samples: then it goes on with
 // its suspension channels only (counted). No node handles: unit-testable.
+// The same class, built for the odom stream (nav_msgs/Odometry: the speed
+// channel), aligns the forward speed by the same rule; the node chains the
+// two (imu/data first, then odom), each with its own counts.
 #pragma once
 
 #include <ros/time.h>
+#include <nav_msgs/Odometry.h>
 #include <sensor_msgs/Imu.h>
 
 #include <cstdint>
@@ -52,13 +56,20 @@ struct ImuReleased {
   double arrival = 0.0;
 };
 
+// Which stream an ImuInput aligns: imu/data (the IMU channels) or odom
+// (the speed channel).
+enum class AlignedStream { kImu, kOdom };
+
 class ImuInput {
  public:
-  explicit ImuInput(const EstimatorConfig& config);
+  explicit ImuInput(const EstimatorConfig& config, AlignedStream stream = AlignedStream::kImu);
   const ImuChannels& channels() const { return channels_; }
+  int speedChannel() const { return speed_channel_; }
   // One imu/data message received at wall-clock `now`; "" or a one-line
   // description of what was not used (for a throttled warning).
   std::string addImu(const sensor_msgs::Imu& msg, double now);
+  // One odom message (the odom stream): as addImu.
+  std::string addOdom(const nav_msgs::Odometry& msg, double now);
   // A converted suspension sample (without IMU channels), stamps in order.
   void addSample(const ros::Time& stamp, const Measurement& m, double arrival);
   // The samples that can go on now, in stamp order.
@@ -69,7 +80,10 @@ class ImuInput {
 
  private:
   ImuReleased alignFront(bool ready);
+  std::string addConversion(ImuConversion c);
   ImuChannels channels_;
+  int speed_channel_ = -1;
+  std::string label_;  // "IMU" | "odom" (in the problem texts)
   ImuAligner aligner_;
   double timeout_;
   std::size_t max_pending_;

@@ -8,6 +8,7 @@
 #include <pc_ekf/ParameterPdf.h>
 #include <pc_ekf/RoadHeights.h>
 #include <pc_ekf/RoadProfile.h>
+#include <nav_msgs/Odometry.h>
 #include <ros/time.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/JointState.h>
@@ -94,12 +95,18 @@ sensor_msgs::JointState jointStateFromMeasurement(const Measurement& m, const ro
 // ---- body IMU (sensor_msgs/Imu on imu/data, REP 145 raw) ----
 
 // The model channels an Imu message fills: linear_acceleration.y, .z ->
-// accel_y, accel_z; angular_velocity.x, .y -> gyro_x, gyro_y (-1: not
-// selected or not a channel of the model; accel_x from .x where a model has it).
+// accel_y, accel_z; angular_velocity.x, .y, .z -> gyro_x, gyro_y, gyro_z
+// (gyro_z: the yaw rate, REP 103; -1: not selected or not a channel of the
+// model; accel_x from .x where a model has it).
 struct ImuChannels {
-  int accel_x = -1, accel_y = -1, accel_z = -1, gyro_x = -1, gyro_y = -1;
+  int accel_x = -1, accel_y = -1, accel_z = -1, gyro_x = -1, gyro_y = -1, gyro_z = -1;
   bool any() const {
-    return accel_x >= 0 || accel_y >= 0 || accel_z >= 0 || gyro_x >= 0 || gyro_y >= 0;
+    return accel_x >= 0 || accel_y >= 0 || accel_z >= 0 || gyro_x >= 0 || gyro_y >= 0 ||
+           gyro_z >= 0;
+  }
+  bool has(int channel) const {
+    return channel >= 0 && (channel == accel_x || channel == accel_y || channel == accel_z ||
+                            channel == gyro_x || channel == gyro_y || channel == gyro_z);
   }
 };
 // The IMU channels of `channel_names` (the model's) that `selected`
@@ -136,6 +143,25 @@ ImuConversion readingFromImu(const sensor_msgs::Imu& msg, const ImuChannels& cha
 sensor_msgs::Imu imuFromMeasurement(const Measurement& m, const ros::Time& stamp,
                                     const ImuChannels& channels,
                                     const std::vector<double>& variances = {});
+
+// ---- odometry (nav_msgs/Odometry on odom): the forward speed ----
+
+// The model channel `speed` when `selected` (measurement.channels) selects
+// it and the model has it, else -1.
+int odomSpeedChannel(const std::vector<std::string>& channel_names,
+                     const std::vector<std::string>& selected);
+
+// Converts one Odometry message: twist.twist.linear.x -> the speed channel;
+// its variance twist.covariance[0] (all zero: "unknown", NaN: the config's
+// noise; a negative or non-finite entry: counted, the config's noise; -1:
+// no data, the channel not observed). Problems as readingFromImu's.
+ImuConversion readingFromOdometry(const nav_msgs::Odometry& msg, int speed_channel);
+
+// The inverse, for writing bags: the speed channel of `m` at `stamp` (NaN
+// when `m` does not observe it); `variance` > 0 fills twist.covariance[0],
+// else the covariance is all zero ("unknown").
+nav_msgs::Odometry odometryFromMeasurement(const Measurement& m, const ros::Time& stamp,
+                                           int speed_channel, double variance = 0.0);
 
 // ---- road ----
 RoadProfile roadProfileMessage(const ros::Time& stamp, double left, double right);

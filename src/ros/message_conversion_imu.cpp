@@ -52,6 +52,7 @@ ImuChannels imuChannels(const std::vector<std::string>& channel_names,
   c.accel_z = indexOf(channel_names, selected, "accel_z");
   c.gyro_x = indexOf(channel_names, selected, "gyro_x");
   c.gyro_y = indexOf(channel_names, selected, "gyro_y");
+  c.gyro_z = indexOf(channel_names, selected, "gyro_z");
   return c;
 }
 
@@ -65,7 +66,7 @@ ImuConversion readingFromImu(const sensor_msgs::Imu& msg, const ImuChannels& ch)
       {"linear_acceleration", &msg.linear_acceleration_covariance,
        {{0, {ch.accel_x, a.x}}, {1, {ch.accel_y, a.y}}, {2, {ch.accel_z, a.z}}}},
       {"angular_velocity", &msg.angular_velocity_covariance,
-       {{0, {ch.gyro_x, w.x}}, {1, {ch.gyro_y, w.y}}}},
+       {{0, {ch.gyro_x, w.x}}, {1, {ch.gyro_y, w.y}}, {2, {ch.gyro_z, w.z}}}},
   };
   std::vector<std::pair<int, std::pair<double, double>>> taken;  // channel, (value, variance)
   static const char* axis_names[3] = {"x", "y", "z"};
@@ -142,9 +143,9 @@ sensor_msgs::Imu imuFromMeasurement(const Measurement& m, const ros::Time& stamp
   msg.linear_acceleration.z = valueOf(ch.accel_z);
   msg.angular_velocity.x = valueOf(ch.gyro_x);
   msg.angular_velocity.y = valueOf(ch.gyro_y);
-  msg.angular_velocity.z = kNaN;
+  msg.angular_velocity.z = valueOf(ch.gyro_z);
   const bool accel = ch.accel_x >= 0 || ch.accel_y >= 0 || ch.accel_z >= 0;
-  const bool gyro = ch.gyro_x >= 0 || ch.gyro_y >= 0;
+  const bool gyro = ch.gyro_x >= 0 || ch.gyro_y >= 0 || ch.gyro_z >= 0;
   if (!accel) {
     msg.linear_acceleration_covariance[0] = -1.0;
   } else {
@@ -157,7 +158,60 @@ sensor_msgs::Imu imuFromMeasurement(const Measurement& m, const ros::Time& stamp
   } else {
     msg.angular_velocity_covariance[0] = varianceOf(ch.gyro_x);
     msg.angular_velocity_covariance[4] = varianceOf(ch.gyro_y);
+    msg.angular_velocity_covariance[8] = varianceOf(ch.gyro_z);
   }
+  return msg;
+}
+
+int odomSpeedChannel(const std::vector<std::string>& channel_names,
+                     const std::vector<std::string>& selected) {
+  return indexOf(channel_names, selected, "speed");
+}
+
+ImuConversion readingFromOdometry(const nav_msgs::Odometry& msg, int speed_channel) {
+  ImuConversion out;
+  out.reading.stamp_ns =
+      static_cast<std::int64_t>(msg.header.stamp.sec) * 1000000000LL + msg.header.stamp.nsec;
+  out.reading.values.resize(0);
+  out.reading.variances.resize(0);
+  if (speed_channel < 0) return out;
+  const auto& cov = msg.twist.covariance;
+  if (cov[0] == -1.0) {
+    out.problems.push_back("twist.covariance[0] = -1: no twist data (speed not observed)");
+    out.problem_kinds.push_back(ImuProblem::kNoData);
+    return out;
+  }
+  const double value = msg.twist.twist.linear.x;
+  if (!std::isfinite(value)) {
+    out.problems.push_back("twist.twist.linear.x is " + std::to_string(value) + ": not observed");
+    out.problem_kinds.push_back(ImuProblem::kNonFinite);
+    return out;
+  }
+  double variance = kNaN;
+  if (std::all_of(cov.begin(), cov.end(), [](double v) { return v == 0.0; })) {
+    ++out.unknown_covariances;
+  } else if (!std::isfinite(cov[0]) || cov[0] < 0.0) {
+    out.problems.push_back("twist.covariance[0] = " + std::to_string(cov[0]) +
+                           " is not a variance: measurement.sensor_std used");
+    out.problem_kinds.push_back(ImuProblem::kBadCovariance);
+  } else if (cov[0] > 0.0) {
+    variance = cov[0];
+  }
+  out.reading.channels.push_back(speed_channel);
+  out.reading.values = Eigen::VectorXd::Constant(1, value);
+  out.reading.variances = Eigen::VectorXd::Constant(1, variance);
+  return out;
+}
+
+nav_msgs::Odometry odometryFromMeasurement(const Measurement& m, const ros::Time& stamp,
+                                           int speed_channel, double variance) {
+  nav_msgs::Odometry msg;
+  msg.header.stamp = stamp;
+  msg.twist.twist.linear.x = kNaN;
+  for (std::size_t i = 0; i < m.channels.size(); ++i) {
+    if (m.channels[i] == speed_channel) msg.twist.twist.linear.x = m.values[static_cast<Eigen::Index>(i)];
+  }
+  if (variance > 0.0) msg.twist.covariance[0] = variance;
   return msg;
 }
 

@@ -29,7 +29,9 @@ const char* kUsage =
     "measurement.channels select IMU channels, sensor_msgs/Imu on imu/data: at the\n"
     "sample times, or with --imu-rate at IMU-OFFSET + k / HZ (k >= 0, t > 0) through\n"
     "one IMU period past the last sample, simulated at those times (covariances all\n"
-    "zero: \"unknown\"). The values are the model's in measurement.zero's convention.\n";
+    "zero: \"unknown\"); gyro_z is angular_velocity.z. When they select speed,\n"
+    "nav_msgs/Odometry on odom at the sample times (twist.twist.linear.x, covariance\n"
+    "all zero). The values are the model's in measurement.zero's convention.\n";
 
 // Parses a finite double; false when the whole text is not one.
 bool parseDouble(const std::string& text, double* value) {
@@ -114,12 +116,21 @@ int main(int argc, char** argv) {
     }
     bag.samples = samples;
     bag.imu = imuChannels(config.model_type->channelNames(), config.measurement.channels);
+    // speed: odom messages (twist.linear.x) at the sample times.
+    bag.odom_speed = odomSpeedChannel(config.model_type->channelNames(), config.measurement.channels);
+    if (bag.odom_speed >= 0) {
+      std::vector<int> other;
+      for (int c : channelIndices(config)) {
+        if (c != bag.odom_speed) other.push_back(c);
+      }
+      bag.odom_samples = onlyChannels(samples, {bag.odom_speed});
+      bag.samples = onlyChannels(samples, other);
+    }
     if (bag.imu.any()) {
       std::vector<int> imu, other;
       for (int c : channelIndices(config)) {
-        const bool is_imu = c == bag.imu.accel_x || c == bag.imu.accel_y || c == bag.imu.accel_z ||
-                            c == bag.imu.gyro_x || c == bag.imu.gyro_y;
-        (is_imu ? imu : other).push_back(c);
+        if (c == bag.odom_speed) continue;
+        (bag.imu.has(c) ? imu : other).push_back(c);
       }
       bag.samples = onlyChannels(samples, other);
       if (imu_rate <= 0.0) {
@@ -173,6 +184,7 @@ int main(int argc, char** argv) {
     }
     std::cerr << " s, seed " << seed;
     if (!bag.imu_samples.empty()) std::cerr << ", " << bag.imu_samples.size() << " imu/data messages";
+    if (!bag.odom_samples.empty()) std::cerr << ", " << bag.odom_samples.size() << " odom messages";
     std::cerr << ")\n";
     return 0;
   });
