@@ -99,7 +99,7 @@ struct Iso8608Settings {
 };
 
 // A lateral manoeuvre (course segments turn, lane_change, slalom), driven at
-// the segment's speed_kmh; a_y left positive (DRIVING.md §2, §7):
+// the segment's speed_kmh; a_y left positive (a left turn, REP 103):
 //  - turn: a_y = lateral_acceleration (or V^2 / radius when radius != 0),
 //    reached and left over `ramp` s by half-cosines;
 //  - lane_change: one period of a_y = lateral_acceleration sin(2 pi t / duration)

@@ -1,5 +1,5 @@
-// The "imu" and "odom" statuses of estimator_node (issue 29, DRIVING.md
-// §2): kept apart from estimator_diagnostics.cpp's other statuses.
+// The "imu" and "odom" statuses of estimator_node (issue 29; odom: the
+// forward speed): kept apart from estimator_diagnostics.cpp's other statuses.
 #include <diagnostic_msgs/DiagnosticStatus.h>
 
 #include <numeric>

@@ -1,4 +1,4 @@
-// rostest (estimator_odom.test, DRIVING.md §2): a road-free bag (config/turns.yaml
+// rostest (estimator_odom.test): a road-free bag (config/turns.yaml
 // with speed and gyro_z) with suspension/joint_states, imu/data (gyro_z in
 // angular_velocity.z) and odom (nav_msgs/Odometry, the speed) at the sample
 // times, played by `rosbag play` in real time without a handshake. No sample

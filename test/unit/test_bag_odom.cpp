@@ -1,4 +1,4 @@
-// DRIVING.md §2, the ROS edge of speed and yaw rate: nav_msgs/Odometry on
+// The ROS edge of speed and yaw rate: nav_msgs/Odometry on
 // odom (twist.twist.linear.x -> speed) and imu/data's angular_velocity.z
 // (-> gyro_z), aligned to the joint_states stamps by the IMU rule
 // (filter/imu_alignment.h), in the node's input (ros/imu_input.h) and in
