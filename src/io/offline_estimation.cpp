@@ -225,7 +225,7 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
 }
 
 OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const MeasurementSeries& readings,
-                                 SampleSink* samples) {
+                                 SampleSink* samples, double interval) {
   if (readings.empty()) throw std::invalid_argument(c.source + ": no samples to estimate from");
   checkRoadFreeRecord(c, readings);  // a refused sample fails now, not hours in
   const auto start = std::chrono::steady_clock::now();
@@ -233,7 +233,7 @@ OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const MeasurementSeri
   r.method = toString(EstimationMethod::kOneStep);
   r.update = toString(c.update);
   r.samples = static_cast<int>(readings.size());
-  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &readings));
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &readings), interval);
   OneStepRun run(c, stream.model(), samples, &r);
   // The coherence filter in step with the stream: the inputs it reads are
   // appended, and forgotten once neither filter needs them.

@@ -16,6 +16,7 @@
 #include "pc_ekf/filter/predictive_check.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/offline_result.h"
+#include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/model/mechanical_model.h"
 
 namespace pc_ekf {
@@ -60,8 +61,11 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& config, const Measurem
 // reads again are forgotten: memory beyond the readings does not grow with
 // the record. The same numbers as runOfflineEstimation on roadFreeRecord()'s
 // split. Throws ConfigError for a sample the stream refuses (before the run).
+// `interval` as RoadFreeStream's: a synthetic drive's sampling.interval(), a
+// record's (the default) from its stamps.
 OfflineResult runRoadFreeOneStep(const EstimatorConfig& config, const MeasurementSeries& readings,
-                                 SampleSink* samples = nullptr);
+                                 SampleSink* samples = nullptr,
+                                 double interval = RoadFreeStream::kObservedInterval);
 
 std::string toJson(const OfflineResult& r);
 

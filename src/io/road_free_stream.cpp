@@ -39,7 +39,8 @@ std::vector<int> inputsStarting(const std::vector<std::string>& inputs, char fir
 
 }  // namespace
 
-RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs)
+RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs,
+                               double interval)
     : source_(c.source),
       standstill_(0.0, {}, {}, {}, {}) {
   const ModelType& type = *c.model_type;
@@ -97,21 +98,59 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
     b.u = static_cast<int>(i);
     b.v = static_cast<int>(v - inputs.begin());
     blends_.push_back(b);
-    // The blended travel's noise at the sampling interval dt, a = tau / (tau + dt):
+  }
+  // A given interval (a synthetic drive's) from the start; a record's from
+  // its stamps (observeInterval): until two samples are read, none, and the
+  // blended travel is its reading (the blend starts from it).
+  if (interval > 0.0 && !blends_.empty()) {
+    interval_ = interval;
+    blendNoiseAt(interval);
+  }
+  observe_interval_ = !(interval > 0.0) && !blends_.empty();
+  accel_z_ = type.description().channelIndex("accel_z");
+}
+
+void RoadFreeStream::blendNoiseAt(double dt) {
+  for (const Blend& b : blends_) {
+    // The blended travel's noise at the sample interval dt, a = tau / (tau + dt):
     // the travel's, low-passed, (1 - a) / (1 + a) of its variance; the rate's
     // trapezoid increments (variance dt^2 sigma_v^2 / 2), high-passed,
     // a^2 / (1 - a^2) of theirs.
-    const double dt = c.sampling.interval(), a = blend_ / (blend_ + dt);
+    const double a = blend_ / (blend_ + dt);
     const double low = (1.0 - a) / (1.0 + a);
     const double high = a * a / (1.0 - a * a) * dt * dt * 0.5 * absolute_[b.v] * absolute_[b.v];
-    absolute_[b.u] = std::sqrt(low * absolute_[b.u] * absolute_[b.u] + high);
-    relative_[b.u] *= std::sqrt(low);
+    absolute_[b.u] = std::sqrt(low * raw_absolute_[b.u] * raw_absolute_[b.u] + high);
+    relative_[b.u] = raw_relative_[b.u] * std::sqrt(low);
     // Its noise is low-passed, so consecutive samples share it: lag-1
     // correlation a, plus the rate's trapezoid that both samples hold.
     const double shared = 0.25 * a * a * dt * dt * absolute_[b.v] * absolute_[b.v];
     inputs_->setNoiseCorrelation(b.u, std::min(0.999, a + shared / (absolute_[b.u] * absolute_[b.u])));
   }
-  accel_z_ = type.description().channelIndex("accel_z");
+}
+
+void RoadFreeStream::observeInterval(double t) {
+  // The median of the intervals between the first kIntervalSamples samples,
+  // taken anew at 2, 4, 8, ... samples (when the inherited noise is renewed)
+  // and kept from the last of them on: a late or dropped sample among them
+  // does not move it.
+  if (!observe_interval_) return;
+  if (std::isfinite(last_time_) && t > last_time_) intervals_.push_back(t - last_time_);
+  last_time_ = t;
+  if (intervals_.empty() || (samples_ & (samples_ - 1)) != 0) return;
+  std::vector<double> sorted = intervals_;
+  const std::size_t mid = sorted.size() / 2;
+  std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(mid), sorted.end());
+  double median = sorted[mid];
+  if (sorted.size() % 2 == 0) {
+    const auto lower_end = sorted.begin() + static_cast<std::ptrdiff_t>(mid);
+    median = 0.5 * (median + *std::max_element(sorted.begin(), lower_end));
+  }
+  interval_ = median;
+  blendNoiseAt(interval_);
+  if (samples_ >= kIntervalSamples) {
+    observe_interval_ = false;
+    std::vector<double>().swap(intervals_);
+  }
 }
 
 std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
@@ -142,6 +181,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   blends_.swap(blend_next_);
   standstill_.commit(m.time, raw_, still);
   ++samples_;
+  observeInterval(m.time);
   Measurement o = onlyChannels(m, outputs_);
   for (std::size_t j = 0; j < o.channels.size(); ++j) {
     if (o.channels[j] != accel_z_) continue;
@@ -222,8 +262,9 @@ std::string roadFreeRefusal(const EstimatorConfig& c, std::size_t k, const Measu
          std::to_string(m.time) + " s): " + problem;
 }
 
-RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
-  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record));
+RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record,
+                              double interval) {
+  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record), interval);
   RoadFreeRecord r;
   r.outputs.reserve(record.size());
   std::string first_problem;

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -25,7 +26,17 @@ class RoadFreeStream {
   // `inputs`: the model's required inputs then the optional ones used.
   // Throws ConfigError when the model cannot take them or cannot predict a
   // selected channel, or no selected channel is left to predict.
-  RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs);
+  // `interval`: the sample interval (s) the blended travel's noise is
+  // reckoned at (measurement.travel_blend). A synthetic drive gives its own
+  // (sampling.interval()); kObservedInterval (a record or a live stream)
+  // takes it from the samples' stamps: the median of the intervals between
+  // the first kIntervalSamples samples, renewed at 2, 4, ... samples (the
+  // first sample's blended travel is its reading, so its noise is the
+  // reading's). The config's sampling: is then never read.
+  static constexpr double kObservedInterval = 0.0;
+  static constexpr long kIntervalSamples = 128;
+  RoadFreeStream(const EstimatorConfig& c, std::vector<std::string> inputs,
+                 double interval = kObservedInterval);
   // The inputs of a record or stream: the required ones, and each optional
   // one that is selected (measurement.channels) and, when `record` is given,
   // read in it.
@@ -62,6 +73,9 @@ class RoadFreeStream {
   long standingSamples() const { return standstill_.standingSamples(); }
   long stops() const { return standstill_.stops(); }
   bool standing() const { return standstill_.standing(); }
+  // The interval the blended travel's noise is reckoned at: the given one,
+  // or the one observed so far (0 before two samples; no blend: 0).
+  double interval() const { return interval_; }
 
  private:
   // measurement.travel_blend: u <- a (u_prev + trapezoid of v over dt) +
@@ -74,6 +88,11 @@ class RoadFreeStream {
     double u_blended = 0.0, t_last = 0.0, v_last = 0.0;
   };
   void blendTravel(Blend& b, double t, std::vector<double>* in) const;
+  // The blended travels' noise (absolute_, relative_ and the inputs' lag-1
+  // correlation) at interval dt, from their raw noise.
+  void blendNoiseAt(double dt);
+  // kObservedInterval: the sample at t taken; the interval renewed.
+  void observeInterval(double t);
   void updateInputNoise();
 
   std::string source_;
@@ -83,6 +102,10 @@ class RoadFreeStream {
   std::vector<int> outputs_;          // ascending model channels
   Eigen::VectorXd absolute_, relative_;  // each input's noise (a blended travel's: after the blend)
   double blend_ = 0.0;                   // measurement.travel_blend (s)
+  double interval_ = 0.0;                // the blend's noise is at this interval (s)
+  bool observe_interval_ = false;        // interval_ still taken from the stamps
+  double last_time_ = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> intervals_;        // observed so far (at most kIntervalSamples - 1)
   std::vector<Blend> blends_, blend_next_;
   int accel_z_ = -1;
   double accel_z_sum_ = 0.0;
@@ -109,7 +132,9 @@ struct RoadFreeRecord {
   std::size_t dropped = 0;  // samples before every input had been read
   std::string warning;      // what was dropped ("" when nothing)
 };
-RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+// `interval` as RoadFreeStream's (a synthetic drive: sampling.interval()).
+RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record,
+                              double interval = RoadFreeStream::kObservedInterval);
 // Throws the ConfigError roadFreeRecord would for the first sample a stream
 // would refuse, without splitting anything (cheap; memory does not grow);
 // returns the leading samples roadFreeRecord would drop (before every input

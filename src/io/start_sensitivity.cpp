@@ -2,7 +2,6 @@
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/record_sensitivity.h"
-#include "pc_ekf/io/road_free_stream.h"
 
 namespace pc_ekf {
 
@@ -10,20 +9,10 @@ StartSensitivity startSensitivity(EstimatorConfig& config) {
   StartSensitivity s;
   if (config.tolerance_count == 0) return s;
   if (config.road.source == RoadSource::kNone) {
-    // No road known: the synthetic drive of truth.road stands for one.
-    if (!config.truth.road) {
-      s.note = "no start sensitivity: road.source none and no truth.road to drive";
-      return s;
-    }
-    const MeasurementSeries drive =
-        synthesizeFromConfig(config, *truthOnItsRoad(config), config.truth.seed);
-    const RoadFreeRecord split = roadFreeRecord(config, onlyChannels(drive, channelIndices(config)));
-    s.road = "road.source none, over truth.road's synthetic drive";
-    s.indices = recordSensitivity(config, split.model, sampleTimes(split.outputs));
-    if (config.tolerances_prune > 0.0) {
-      s.note = "tolerances_prune not applied: the live road is not known; rank the tolerances "
-               "with estimate_offline --sensitivity on a recorded bag";
-    }
+    // No road known, and the live record not yet: nothing to rank over (the
+    // config's truth: describes synthetic drives, not the vehicle's).
+    s.note = "no start sensitivity: road.source none and the live record is not known at start; "
+             "rank the tolerances with estimate_offline --sensitivity on a recorded bag";
     return s;
   }
   EstimatorConfig analytic = config;

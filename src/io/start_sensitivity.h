@@ -1,7 +1,9 @@
 // The sensitivity a node reports once at start (docs/real_vehicle.md): the
-// record is not known yet, so the indices are those of the config's sampling
-// (sampling.samples over sampling.duration) on its analytic road; with a road
-// from the topic, on the config's road.speed_bump settings, and said so.
+// record is not known yet, so the indices are a forecast over the config's
+// synthetic drive, sampling.samples over sampling.duration on its analytic
+// road; with a road from the topic, on the config's road.speed_bump settings,
+// and said so. Road-free (road.source none) there is no road to drive and
+// none is computed (truth.road describes synthetic drives, not the vehicle).
 // tolerances_prune is applied only on an analytic road (the node then
 // estimates what estimate_offline estimates on the same synthetic record).
 #pragma once

@@ -110,18 +110,27 @@ inline Accelerations accelerations(const ConstantPointers& c, Eigen::Index q, co
   return a;
 }
 
-// One point, state s[8] -> d[8] (any strides); cos by cosOfSum (library beyond the series).
+// One point's spring and damper forces on the body ends, f[i] = -(spring
+// increment + damper force) of side i; shared by pointDerivatives and
+// elevatedPointDerivatives (any stride).
 template <DamperLaw law>
-inline void pointDerivatives(const ConstantPointers& c, Eigen::Index q, double tanh_rate,
-                             double road0, double road1, const double* s, Eigen::Index s_stride,
-                             double* d, Eigen::Index d_stride) {
-  double f[2];
+inline void suspensionForces(const ConstantPointers& c, Eigen::Index q, double tanh_rate,
+                             const double* s, Eigen::Index s_stride, double f[2]) {
   for (int i = 0; i < 2; ++i) {
     const double u = s[i * s_stride] - s[(2 + i) * s_stride];
     const double v = s[(4 + i) * s_stride] - s[(6 + i) * s_stride];
     f[i] = -springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q], c.three_delta_sq[i][q]) -
            damperForce<law>(c.damping[i][q], tanh_rate, v);
   }
+}
+
+// One point, state s[8] -> d[8] (any strides); cos by cosOfSum (library beyond the series).
+template <DamperLaw law>
+inline void pointDerivatives(const ConstantPointers& c, Eigen::Index q, double tanh_rate,
+                             double road0, double road1, const double* s, Eigen::Index s_stride,
+                             double* d, Eigen::Index d_stride) {
+  double f[2];
+  suspensionForces<law>(c, q, tanh_rate, s, s_stride, f);
   const double theta = (s[s_stride] - s[0]) * c.inv_length[q];
   const double lever = cosOfSum(c.roll_static[q], c.cos_static[q], c.sin_static[q], theta);
   const Accelerations a =
@@ -147,12 +156,7 @@ inline double elevatedPointDerivatives(const ConstantPointers& c, Eigen::Index q
                                        double lateral, const double* s, Eigen::Index s_stride,
                                        double* d, Eigen::Index d_stride) {
   double f[2];
-  for (int i = 0; i < 2; ++i) {
-    const double u = s[i * s_stride] - s[(2 + i) * s_stride];
-    const double v = s[(4 + i) * s_stride] - s[(6 + i) * s_stride];
-    f[i] = -springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q], c.three_delta_sq[i][q]) -
-           damperForce<law>(c.damping[i][q], tanh_rate, v);
-  }
+  suspensionForces<law>(c, q, tanh_rate, s, s_stride, f);
   const double twist = c.bar[q] * ((s[0] - s[2 * s_stride]) - (s[s_stride] - s[3 * s_stride]));
   f[0] -= twist;
   f[1] += twist;

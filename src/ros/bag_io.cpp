@@ -360,12 +360,13 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
   // Every message is converted as it is read; what is kept is the road's
   // numbers, the samples (bag order, their times set once the origin is
   // known) and the last ground truth.
-  const bool road_free = options.road_free_interval > 0.0;
+  const bool road_free = options.road_free;
   RoadRows road;
   std::vector<StampedSample> raw;
   std::vector<std::string> sample_warnings;  // bag order, reported after the road's checks
   std::size_t joint_messages = 0;
   ros::Time first_joint;                    // the earliest joint_states stamp
+  std::optional<ros::Time> second_joint;    // the next later one
   std::optional<ros::Time> first_before_road;  // bag order: the first stamped before the road
   std::optional<ParameterEstimate> last_truth;
   std::vector<std::string> topics;
@@ -424,7 +425,12 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
     readTopic<sensor_msgs::JointState>(
         path, bag, record.joint_states_topic, [&](const sensor_msgs::JointState& js) {
           const ros::Time& stamp = js.header.stamp;
-          first_joint = joint_messages++ == 0 ? stamp : std::min(first_joint, stamp);
+          if (joint_messages++ == 0 || stamp < first_joint) {
+            if (joint_messages > 1) second_joint = first_joint;
+            first_joint = stamp;
+          } else if (stamp > first_joint && (!second_joint || stamp < *second_joint)) {
+            second_joint = stamp;
+          }
           if (road_origin && stamp < *road_origin && !first_before_road) first_before_road = stamp;
           JointStateConversion c = measurementFromJointState(js, 0.0, options.joints);
           for (const auto& p : c.problems) {
@@ -458,8 +464,12 @@ BagRecord readBag(const std::string& path, const BagReadOptions& options) {
                    "' has no messages (no samples)");
   }
   if (road_free) {
+    if (!second_joint) {
+      throw BagError(path + ": road.source none: one '" + record.joint_states_topic +
+                     "' stamp only; the interval between the first two sets t = 0");
+    }
     try {
-      record.origin = stampAt(first_joint, -options.road_free_interval);
+      record.origin = stampAt(first_joint, -secondsSince(*second_joint, first_joint));
     } catch (const std::invalid_argument&) {
       record.origin = ros::Time(0, 0);  // stamps near zero (sim time): t = stamp
     }
@@ -505,7 +515,7 @@ BagReadOptions bagReadOptions(const EstimatorConfig& config) {
   o.imu = imuChannels(config.model_type->channelNames(), config.measurement.channels);
   o.imu_max_gap = config.node.imu_max_gap;
   o.odom_speed = odomSpeedChannel(config.model_type->channelNames(), config.measurement.channels);
-  if (config.road.source == RoadSource::kNone) o.road_free_interval = config.sampling.interval();
+  o.road_free = config.road.source == RoadSource::kNone;
   if (config.model_type->twoContacts()) return o;
   o.joints = suspensionJoints(*config.model_type, config.node.joint_names);
   o.contacts = config.model_type->contactNames();

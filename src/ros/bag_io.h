@@ -63,10 +63,11 @@ struct BagReadOptions {
   // The speed channel to read from odom_topic (-1: the topic is not read).
   int odom_speed = -1;
   std::string odom_topic = kOdomTopic;
-  // Road-free (road.source none, > 0): no road is read, and t = 0 lies this
-  // long before the first joint_states stamp, as the node's (the config's
-  // sampling interval).
-  double road_free_interval = 0.0;
+  // Road-free (road.source none): no road is read, and t = 0 lies one
+  // sample interval before the first joint_states stamp, the interval
+  // between the first two stamps, as the node's (never the config's
+  // sampling:, which describes synthetic drives only).
+  bool road_free = false;
 };
 
 struct BagRecord {

@@ -69,7 +69,6 @@ void EstimatorDiagnostics::reportConfiguration(diagnostic_updater::DiagnosticSta
   s.add("update rule", toString(c.update));
   s.add("pc order", c.pc_order);
   s.add("collocation points", c.collocation.points);
-  s.add("sampling interval (analytic origin)", c.sampling.interval());
   std::string joints;
   for (const auto& j : c.node.joint_names) joints += (joints.empty() ? "" : ", ") + j;
   s.add("joints", joints);

@@ -13,7 +13,7 @@ TimelineSettings timelineSettings(const EstimatorConfig& c) {
   TimelineSettings s;
   s.road_topic_required = c.road.source == RoadSource::kTopic;
   s.road_free = c.road.source == RoadSource::kNone;
-  s.analytic_interval = c.sampling.interval();
+  s.analytic_interval = 0.0;  // the stream's own: its first two stamps (never sampling:)
   s.time_jump_tolerance = c.node.time_jump_tolerance;
   s.road_wait_timeout = c.node.road_wait_timeout;
   s.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);
@@ -159,9 +159,15 @@ std::vector<ReleasedSample> EstimatorTimeline::release(double now, DroppedSample
         pending_.pop_front();
         continue;
       }
+      // t = 0 one sample interval before the first sample: the interval
+      // between the first two stamps, so the first waits for the second.
+      const bool observed = !(settings_.analytic_interval > 0.0);
+      if (observed && pending_.size() < 2) break;
+      const double interval =
+          observed ? secondsSince(pending_[1].stamp, p.stamp) : settings_.analytic_interval;
       mode_ = RoadMode::kAnalytic;
       try {
-        origin_ = stampAt(p.stamp, -settings_.analytic_interval);
+        origin_ = stampAt(p.stamp, -interval);
       } catch (const std::invalid_argument&) {
         origin_ = ros::Time(0, 0);  // stamps near zero (sim time): t = stamp
       }

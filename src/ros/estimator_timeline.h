@@ -24,7 +24,7 @@ struct EstimatorConfig;
 enum class RoadMode {
   kUndecided,  // no road message yet and no sample released
   kTopic,      // road/profile; t = 0 at its first stamp
-  kAnalytic,   // the config's road; t = 0 one sampling interval before the first sample
+  kAnalytic,   // the config's road (or none); t = 0 one sample interval before the first sample
 };
 
 // What happened to a message offered to the timeline.
@@ -44,7 +44,10 @@ struct TimelineSettings {
   // road.source: none: no road is used, so none is waited for: the first
   // sample sets the origin at once, and road messages are ignored.
   bool road_free = false;
-  double analytic_interval = 0.0;    // sampling interval (s) for the analytic origin
+  // The sample interval (s) that puts the analytic origin before the first
+  // sample; 0: the stream's own, the interval between its first two
+  // stamps (the first sample waits for the second; the node's).
+  double analytic_interval = 0.0;
   double time_jump_tolerance = 0.5;  // s
   double road_wait_timeout = 0.5;    // s of wall clock
   std::size_t max_pending = 1000;
@@ -52,7 +55,8 @@ struct TimelineSettings {
   int contacts = 2;                  // road heights per road message (the model's contacts)
 };
 
-// The settings the config's node: and sampling sections give.
+// The settings the config's node: section gives (the analytic origin's
+// interval is the stream's: sampling: describes synthetic drives only).
 TimelineSettings timelineSettings(const EstimatorConfig& config);
 
 // A sample the filter may process now, its time set (s since the origin).

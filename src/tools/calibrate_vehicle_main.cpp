@@ -98,8 +98,9 @@ int main(int argc, char** argv) {
       EstimatorConfig config = loadConfigFile(s.config, modelRegistryOnDemand());
       if (!update.empty()) config.update = updateRuleFromString(update);
       checkCalibrationConfig(config, records.empty() ? nullptr : &records.front().config);
-      seed = config.truth.seed;
-      if (!seed_text.empty()) seed = std::stoull(seed_text);
+      const std::uint64_t given = seed_text.empty() ? 0 : std::stoull(seed_text);
+      seed = runSeed(config, !s.bag.empty() || !s.csv.empty(),
+                     seed_text.empty() ? nullptr : &given);
       RecordInput in = loadRecord(config, s.bag, s.csv, seed);
       PriorSensitivity sensitivity;
       std::vector<std::string> pruned;

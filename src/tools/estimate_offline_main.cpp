@@ -47,9 +47,11 @@ int main(int argc, char** argv) {
     if (args.has("--update")) config.update = updateRuleFromString(args["--update"]);
     const EstimationMethod method =
         estimationMethodFromString(args.has("--method") ? args["--method"] : "one_step");
-    std::uint64_t seed = config.truth.seed;
+    std::uint64_t given_seed = 0;
     int status = 0;
-    if (args.has("--seed") && !args.unsignedValue("--seed", &seed, &status)) return status;
+    if (args.has("--seed") && !args.unsignedValue("--seed", &given_seed, &status)) return status;
+    const std::uint64_t seed = runSeed(config, args.has("--bag") || args.has("--measurements"),
+                                       args.has("--seed") ? &given_seed : nullptr);
     // Road-free one-step splits the readings as the filter goes (memory:
     // the readings); the other methods, the sensitivity and
     // tolerances_prune need the whole split first.
@@ -70,7 +72,7 @@ int main(int argc, char** argv) {
     std::unique_ptr<OfflineOutputs> out;
     if (args.has("--out")) out = std::make_unique<OfflineOutputs>(args["--out"]);
     OfflineResult result =
-        stream_road_free ? runRoadFreeOneStep(config, series, out.get())
+        stream_road_free ? runRoadFreeOneStep(config, series, out.get(), record.interval)
                          : runOfflineEstimation(config, series, model, method, seed, progress,
                                                 nullptr, out.get());
     result.warnings.insert(result.warnings.begin(), record.warnings.begin(), record.warnings.end());

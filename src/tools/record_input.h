@@ -22,7 +22,20 @@ struct RecordInput {
   // About the record as read (also on stderr): road-free samples dropped
   // before every input had been read.
   std::vector<std::string> warnings;
+  // The sample interval a road-free stream reckons with: a synthetic drive's
+  // is its sampling:'s, a record's comes from its stamps
+  // (RoadFreeStream::kObservedInterval; sampling: is not read).
+  double interval = RoadFreeStream::kObservedInterval;
 };
+
+// The seed of a run's random draws (the EnKF's, the synthetic data's):
+// `--seed` when given, else truth.seed for a synthetic drive and 0 for a
+// record (truth: describes synthetic drives only and is not read on one).
+inline std::uint64_t runSeed(const EstimatorConfig& config, bool record,
+                             const std::uint64_t* given) {
+  if (given) return *given;
+  return record ? 0 : config.truth.seed;
+}
 
 // `bag` and `csv` are paths ("" when not given; at most one of them).
 // With road.source none the model is the road-free one built from the
@@ -54,6 +67,7 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
     // Road-free: the truth drives on truth.road (the estimator knows none).
     const auto truth = road_free ? truthOnItsRoad(config) : r.model;
     r.series = synthesizeFromConfig(config, *truth, seed);
+    r.interval = config.sampling.interval();
   }
   // A recording may hold more channels than measurement.channels selects.
   const std::vector<int> selected = channelIndices(config);
@@ -65,7 +79,7 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
     throw ConfigError((bag.empty() ? csv : bag) + ": " + zero);
   }
   if (road_free && split_road_free) {
-    RoadFreeRecord split = roadFreeRecord(config, r.series);
+    RoadFreeRecord split = roadFreeRecord(config, r.series, r.interval);
     r.model = split.model;
     r.series = std::move(split.outputs);
     if (!split.warning.empty()) {

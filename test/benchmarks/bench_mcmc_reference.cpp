@@ -32,7 +32,8 @@ long envInt(const char* name, long fallback) {
 
 Scenario roadFreeScenario(const EstimatorConfig& c) {
   const RoadFreeRecord split =
-      roadFreeRecord(c, synthesizeFromConfig(c, *truthOnItsRoad(c), c.truth.seed));
+      roadFreeRecord(c, synthesizeFromConfig(c, *truthOnItsRoad(c), c.truth.seed),
+                     c.sampling.interval());
   Scenario s;
   s.config = c;
   s.model = split.model;

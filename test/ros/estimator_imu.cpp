@@ -69,46 +69,21 @@ TEST(EstimatorImu, RosbagPlayWithImuAtItsOwnRateEqualsOffline) {
   RecordProperty("mass_stddev_with_imu", std::to_string(imu_mass_sd));
   RecordProperty("mass_stddev_without_imu", std::to_string(no_imu_mass_sd));
 
-  ros::NodeHandle nh;
-  std::vector<ParameterEstimate> estimates;
-  std::map<std::string, std::string> imu;  // the estimator's "imu" status values
-  ros::Subscriber estimate_sub = nh.subscribe<ParameterEstimate>(
-      "parameter_estimate", 100000,
-      [&](const ParameterEstimate::ConstPtr& m) { estimates.push_back(*m); });
-  int truths = 0;
-  // rosbag play --wait-for-subscribers waits for one on every topic of the bag.
-  ros::Subscriber truth_sub = nh.subscribe<ParameterEstimate>(
-      "ground_truth", 10, [&](const ParameterEstimate::ConstPtr&) { ++truths; });
-  ros::Subscriber diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
-      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
-        for (const auto& s : m->status) {
-          if (s.name.size() > 4 && s.name.compare(s.name.size() - 4, 4, " imu") == 0) {
-            for (const auto& kv : s.values) imu[kv.key] = kv.value;
-          }
-        }
-      });
-  const auto spin = [] { ros::spinOnce(); };
-  ASSERT_TRUE(spinUntil(60.0, spin, [&] { return estimate_sub.getNumPublishers() > 0; }))
-      << "estimator_node did not come up";
-
   // Real time, no handshake: the node must align the two streams by itself.
-  ChildProcess play("/usr/bin/rosbag",
-                    {"play", "--quiet", "--wait-for-subscribers", "--rate=1", bag},
-                    scratch.file("play.out"), scratch.file("play.err"));
-  ASSERT_TRUE(play.waitFor(120.0, spin)) << "rosbag play did not finish";
-  ASSERT_EQ(play.status(), 0) << play.err();
-  spinUntil(30.0, spin, [&] { return estimates.size() >= kSamples; });
-  spinUntil(1.0, spin, [] { return false; });  // a duplicate would arrive now
+  BagIntoNode node("imu");
+  node.play(scratch, bag, kSamples);
+  if (HasFatalFailure()) return;
+  std::map<std::string, std::string>& imu = node.status;
+  std::vector<ParameterEstimate>& estimates = node.estimates;
+  const auto spin = BagIntoNode::spin;
 
   ASSERT_EQ(estimates.size(), kSamples) << "samples lost";
-  EXPECT_EQ(truths, 1);
+  EXPECT_EQ(node.truths, 1);
   compareWithOffline(estimates, offline, column, kRelativeTolerance);
   if (HasFatalFailure()) return;
 
-
-  ASSERT_TRUE(spinUntil(15.0, spin, [&] {
-    return imu.count("samples aligned") && imu["samples aligned"] == std::to_string(kSamples);
-  })) << "diagnostics: " << (imu.count("samples aligned") ? imu["samples aligned"] : "none");
+  ASSERT_TRUE(node.statusReaches("samples aligned", std::to_string(kSamples)))
+      << "diagnostics: " << (imu.count("samples aligned") ? imu["samples aligned"] : "none");
   EXPECT_EQ(imu["samples without imu"], "0");
   EXPECT_EQ(imu["samples waiting for imu"], "0");
   EXPECT_EQ(imu["imu messages received"], "301");

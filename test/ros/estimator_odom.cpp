@@ -41,43 +41,19 @@ TEST(EstimatorOdom, RosbagPlayWithOdomAndYawRateEqualsOffline) {
   std::map<std::string, std::size_t> column;
   for (const std::string& h : header) column[h] = column.size();
 
-  ros::NodeHandle nh;
-  std::vector<ParameterEstimate> estimates;
-  std::map<std::string, std::string> odom;  // the estimator's "odom" status values
-  ros::Subscriber estimate_sub = nh.subscribe<ParameterEstimate>(
-      "parameter_estimate", 100000,
-      [&](const ParameterEstimate::ConstPtr& m) { estimates.push_back(*m); });
-  int truths = 0;
-  ros::Subscriber truth_sub = nh.subscribe<ParameterEstimate>(
-      "ground_truth", 10, [&](const ParameterEstimate::ConstPtr&) { ++truths; });
-  ros::Subscriber diagnostics_sub = nh.subscribe<diagnostic_msgs::DiagnosticArray>(
-      "/diagnostics", 100, [&](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
-        for (const auto& s : m->status) {
-          if (s.name.size() > 5 && s.name.compare(s.name.size() - 5, 5, " odom") == 0) {
-            for (const auto& kv : s.values) odom[kv.key] = kv.value;
-          }
-        }
-      });
-  const auto spin = [] { ros::spinOnce(); };
-  ASSERT_TRUE(spinUntil(60.0, spin, [&] { return estimate_sub.getNumPublishers() > 0; }))
-      << "estimator_node did not come up";
-
-  ChildProcess play("/usr/bin/rosbag",
-                    {"play", "--quiet", "--wait-for-subscribers", "--rate=1", bag},
-                    scratch.file("play.out"), scratch.file("play.err"));
-  ASSERT_TRUE(play.waitFor(120.0, spin)) << "rosbag play did not finish";
-  ASSERT_EQ(play.status(), 0) << play.err();
-  spinUntil(30.0, spin, [&] { return estimates.size() >= kSamples; });
-  spinUntil(1.0, spin, [] { return false; });
+  BagIntoNode node("odom");
+  node.play(scratch, bag, kSamples);
+  if (HasFatalFailure()) return;
+  std::map<std::string, std::string>& odom = node.status;
+  const std::vector<ParameterEstimate>& estimates = node.estimates;
 
   ASSERT_EQ(estimates.size(), kSamples) << "samples lost";
-  EXPECT_EQ(truths, 1);
+  EXPECT_EQ(node.truths, 1);
   compareWithOffline(estimates, offline, column, kRelativeTolerance);
   if (HasFatalFailure()) return;
 
-  ASSERT_TRUE(spinUntil(15.0, spin, [&] {
-    return odom.count("samples aligned") && odom["samples aligned"] == std::to_string(kSamples);
-  })) << "diagnostics: " << (odom.count("samples aligned") ? odom["samples aligned"] : "none");
+  ASSERT_TRUE(node.statusReaches("samples aligned", std::to_string(kSamples)))
+      << "diagnostics: " << (odom.count("samples aligned") ? odom["samples aligned"] : "none");
   EXPECT_EQ(odom["samples without odom"], "0");
   EXPECT_EQ(odom["odom messages received"], std::to_string(kSamples));
   EXPECT_NEAR(std::stod(odom["max |stamp offset| (ms)"]), 0.0, 1e-6);

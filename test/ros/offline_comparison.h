@@ -1,17 +1,22 @@
 // Shared by the rostests that replay a bag into estimator_node and compare
 // every estimate with estimate_offline --bag's samples.csv (estimator_imu,
-// estimator_road_free): mean, std and every PC coefficient to a relative
-// tolerance.
+// estimator_odom, estimator_road_free): mean, std and every PC coefficient
+// to a relative tolerance; and the bag played by `rosbag play` in real time
+// (BagIntoNode).
 #pragma once
 
+#include <diagnostic_msgs/DiagnosticArray.h>
 #include <gtest/gtest.h>
 #include <pc_ekf/ParameterEstimate.h>
+#include <ros/ros.h>
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <string>
 #include <vector>
+
+#include "replay_test_support.h"
 
 namespace pc_ekf::test {
 
@@ -52,5 +57,60 @@ inline void compareWithOffline(const std::vector<ParameterEstimate>& estimates,
   }
   ::testing::Test::RecordProperty("max_relative_stddev_difference", std::to_string(max_relative));
 }
+
+// A bag played into estimator_node by `rosbag play` in real time, without a
+// handshake (the node aligns its streams by itself): the estimates, the
+// ground truths seen and the values of the diagnostics status whose name
+// ends in " <status>" (e.g. "imu", "odom"), kept as they arrive.
+class BagIntoNode {
+ public:
+  explicit BagIntoNode(const std::string& status) : suffix_(" " + status) {
+    estimate_sub_ = nh_.subscribe<ParameterEstimate>(
+        "parameter_estimate", 100000,
+        [this](const ParameterEstimate::ConstPtr& m) { estimates.push_back(*m); });
+    // rosbag play --wait-for-subscribers waits for one on every topic of the bag.
+    truth_sub_ = nh_.subscribe<ParameterEstimate>(
+        "ground_truth", 10, [this](const ParameterEstimate::ConstPtr&) { ++truths; });
+    diagnostics_sub_ = nh_.subscribe<diagnostic_msgs::DiagnosticArray>(
+        "/diagnostics", 100, [this](const diagnostic_msgs::DiagnosticArray::ConstPtr& m) {
+          for (const auto& s : m->status) {
+            if (s.name.size() > suffix_.size() &&
+                s.name.compare(s.name.size() - suffix_.size(), suffix_.size(), suffix_) == 0) {
+              for (const auto& kv : s.values) status[kv.key] = kv.value;
+            }
+          }
+        });
+  }
+  BagIntoNode(const BagIntoNode&) = delete;
+  BagIntoNode& operator=(const BagIntoNode&) = delete;
+
+  // Waits for the node, plays `bag` and waits for `samples` estimates (and a
+  // second more, in which a duplicate would arrive).
+  void play(const ScratchDir& scratch, const std::string& bag, std::size_t samples) {
+    ASSERT_TRUE(spinUntil(60.0, spin, [&] { return estimate_sub_.getNumPublishers() > 0; }))
+        << "estimator_node did not come up";
+    ChildProcess play("/usr/bin/rosbag",
+                      {"play", "--quiet", "--wait-for-subscribers", "--rate=1", bag},
+                      scratch.file("play.out"), scratch.file("play.err"));
+    ASSERT_TRUE(play.waitFor(120.0, spin)) << "rosbag play did not finish";
+    ASSERT_EQ(play.status(), 0) << play.err();
+    spinUntil(30.0, spin, [&] { return estimates.size() >= samples; });
+    spinUntil(1.0, spin, [] { return false; });
+  }
+  // Waits until the status's `key` reads `value`; false on time-out.
+  bool statusReaches(const std::string& key, const std::string& value, double seconds = 15.0) {
+    return spinUntil(seconds, spin, [&] { return status.count(key) && status[key] == value; });
+  }
+  static void spin() { ros::spinOnce(); }
+
+  std::vector<ParameterEstimate> estimates;
+  int truths = 0;
+  std::map<std::string, std::string> status;
+
+ private:
+  std::string suffix_;
+  ros::NodeHandle nh_;
+  ros::Subscriber estimate_sub_, truth_sub_, diagnostics_sub_;
+};
 
 }  // namespace pc_ekf::test
