@@ -64,7 +64,7 @@ inline void compareWithOffline(const std::vector<ParameterEstimate>& estimates,
 // ends in " <status>" (e.g. "imu", "odom"), kept as they arrive.
 class BagIntoNode {
  public:
-  explicit BagIntoNode(const std::string& status) : suffix_(" " + status) {
+  explicit BagIntoNode(const std::string& status_name) : suffix_(" " + status_name) {
     estimate_sub_ = nh_.subscribe<ParameterEstimate>(
         "parameter_estimate", 100000,
         [this](const ParameterEstimate::ConstPtr& m) { estimates.push_back(*m); });
