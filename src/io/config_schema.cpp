@@ -8,7 +8,20 @@ const std::vector<ConfigKey>& configSchema() {
   static const std::vector<ConfigKey> keys = {
       // model and its values
       {"model.type", "text", "roll_plane", "roll_plane, full_car or a plugin's package/Class", "the model type: it owns the `vehicle:` keys, the contacts (road inputs), the channels and the suspensions (`node.joints` keys); [models.md](models.md)"},
-      {"vehicle.<name>", "number or choice", "the model type's (models.md)", "the model type's (models.md)", "a value of the model: its parameters, settings and choices, with names, units, defaults and domains in [models.md](models.md)"},
+      {"vehicle.<name>", "number or choice", "the model type's (models.md)", "the model type's (models.md)", "a value of the model: its parameters, settings and choices, with names, units, defaults and domains in [models.md](models.md); the model's rates are wheel rates; the datasheet forms below convert to them when the section is read ([models.md, datasheet values](models.md#datasheet-values))"},
+      {"vehicle.motion_ratio_<side>", "number", "none", "(0, inf)", "datasheet: spring (and damper) travel per wheel travel of a side (`<side>`: a suffix of the model's `spring_linear_` keys: left, right; front, rear); converts the side's `spring_rate_`, `spring_cubic_rate_`, `damper_rate_`, damper table (and the roll plane's `spring_track`); given alone it is refused"},
+      {"vehicle.damper_motion_ratio_<side>", "number", "none (motion_ratio_<side>)", "(0, inf)", "datasheet: the damper's travel per wheel travel when it differs from the spring's"},
+      {"vehicle.spring_rate_<side>", "number", "none", "(0, inf)", "datasheet: N/m at the spring; `spring_linear_<side>` = rate x ratio^2 (not both)"},
+      {"vehicle.spring_cubic_rate_<side>", "number", "none", "[0, inf)", "datasheet: N/m^3 at the spring; `spring_cubic_<side>` = rate x ratio^4 (not both)"},
+      {"vehicle.damper_rate_<side>", "number", "none", "[0, inf)", "datasheet: N s/m at the damper; `damping_<side>` = rate x damper ratio^2 (not both, nor with a table)"},
+      {"vehicle.damper_table", "map", "none", "bump: and rebound: lists", "datasheet (roll plane): the measured damper curve at the damper, for both sides; sets `damper: table`; at the wheel velocity / ratio and force x ratio; `damping_<side>` defaults to the curve's mean bump and rebound slope at 0 and scales the curve by damping / that slope ([models.md](models.md#datasheet-values))"},
+      {"vehicle.damper_table.bump", "list", "required", "[velocity m/s, force N] pairs, >= 0, velocity increasing, force not falling", "compression: the force magnitude at each velocity magnitude; (0, 0) is added (a point at velocity 0 must have force 0); linear between the points, extrapolated along the last segment"},
+      {"vehicle.damper_table.rebound", "list", "required", "as bump", "extension, as bump"},
+      {"vehicle.damper_table_<side>", "map", "none", "as damper_table (not with it)", "datasheet (roll plane): one side's curve, keys as `damper_table`"},
+      {"vehicle.wheel_track", "number", "none", "(0, inf)", "datasheet (roll plane): the track at the wheels; `bar_length` (the wheel track: the model's rates act at the wheels) takes it; not with bar_length or spring_track"},
+      {"vehicle.spring_track", "number", "none", "(0, inf)", "datasheet (roll plane): the track at the springs; bar_length = spring_track / the mean of motion_ratio_left and motion_ratio_right (arms pivoting near the centre line: prefer wheel_track)"},
+      {"vehicle.wheelbase", "number", "none", "(0, inf)", "datasheet (full car): with front_axle_load_share, front_axle_distance a = (1 - share) x wheelbase and rear_axle_distance b = share x wheelbase (not with them)"},
+      {"vehicle.front_axle_load_share", "number", "none", "(0, 1)", "datasheet (full car): the share of the body's own weight on the front axle (axle loads less the unsprung masses, over their sum)"},
       // what is estimated
       {"uncertain", "list", "[] (needs tolerances:)", "at least one entry, or tolerances: with a positive one", "the parameters to estimate (the load): value = nominal (1 + relative_range xi); a config with neither `uncertain:` entries nor a positive `tolerances:` entry is refused"},
       {"uncertain[i].name", "text", "required", "a model parameter, each once", "the `vehicle:` key estimated"},

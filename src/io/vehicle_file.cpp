@@ -5,6 +5,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "pc_ekf/io/yaml_reader.h"
 
@@ -17,6 +19,43 @@ void anchorVehicleFile(YAML::Node& root, const std::string& config_path) {
   const std::filesystem::path dir = std::filesystem::path(config_path).parent_path();
   root["vehicle_file"] = (dir / file).lexically_normal().string();
 }
+
+namespace {
+
+// The datasheet forms (docs/models.md) that set a model key: a vehicle file's
+// value of that key replaces them too (calibrate_vehicle writes model keys).
+std::vector<std::string> datasheetFormsOf(const std::string& key) {
+  const auto side = [&](const std::string& prefix) {
+    return key.compare(0, prefix.size(), prefix) == 0 ? key.substr(prefix.size()) : "";
+  };
+  if (!side("spring_linear_").empty()) return {"spring_rate_" + side("spring_linear_")};
+  if (!side("spring_cubic_").empty()) return {"spring_cubic_rate_" + side("spring_cubic_")};
+  if (!side("damping_").empty()) return {"damper_rate_" + side("damping_")};
+  if (key == "bar_length") return {"wheel_track", "spring_track"};
+  return {};
+}
+
+// Motion ratios left with nothing to convert (their rates replaced above).
+void dropUnusedMotionRatios(YAML::Node& vehicle) {
+  const YAML::Node look = vehicle;  // const lookups add no keys
+  std::vector<std::string> unused;
+  for (const auto& entry : look) {
+    const std::string k = entry.first.Scalar();
+    for (const std::string prefix : {"motion_ratio_", "damper_motion_ratio_"}) {
+      if (k.compare(0, prefix.size(), prefix) != 0) continue;
+      const std::string side = k.substr(prefix.size());
+      bool used = look["damper_table"] || look["spring_track"];
+      for (const std::string rate :
+           {"spring_rate_", "spring_cubic_rate_", "damper_rate_", "damper_table_"}) {
+        used = used || look[rate + side];
+      }
+      if (!used) unused.push_back(k);
+    }
+  }
+  for (const std::string& k : unused) vehicle.remove(k);
+}
+
+}  // namespace
 
 YAML::Node mergeVehicleFile(const YAML::Node& root, const std::string& source, std::string* path) {
   if (path) path->clear();
@@ -58,7 +97,12 @@ YAML::Node mergeVehicleFile(const YAML::Node& root, const std::string& source, s
     if (!out[section] || out[section].IsNull()) out[section] = YAML::Node(YAML::NodeType::Map);
     YAML::Node target = out[section];
     if (!target.IsMap()) continue;  // the config's own wrong type is reported by the parser
-    for (const auto& entry : kv.second) target[entry.first.Scalar()] = YAML::Clone(entry.second);
+    for (const auto& entry : kv.second) {
+      target[entry.first.Scalar()] = YAML::Clone(entry.second);
+      if (section != "vehicle") continue;
+      for (const std::string& form : datasheetFormsOf(entry.first.Scalar())) target.remove(form);
+    }
+    if (section == "vehicle") dropUnusedMotionRatios(target);
   }
   if (path) *path = file;
   return out;

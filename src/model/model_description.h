@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -100,6 +101,9 @@ struct ModelParameters {
   Eigen::VectorXd values;
   Eigen::VectorXd settings;
   std::vector<std::string> choices;
+  // Tabulated laws a choice asks for, by name (e.g. damper_table_left when
+  // damper is table: row 0 velocities, row 1 forces); empty otherwise.
+  std::map<std::string, Eigen::MatrixXd> tables;
   static ModelParameters defaults(const ModelDescription& d);
   double setting(const ModelDescription& d, const std::string& name) const {
     return settings[d.settings().at(name)];

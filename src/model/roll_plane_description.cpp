@@ -38,7 +38,8 @@ FieldTable<RollPlaneFields> parameterFields() {
        PC_EKF_FIELD(spring_cubic[0])},
       {{"spring_cubic_right", "N/m^3", 100000.0, nonNegative(), "cubic spring stiffness k3, right"},
        PC_EKF_FIELD(spring_cubic[1])},
-      {{"bar_length", "m", 1.524, positive(), "length L of the bar (track)"},
+      {{"bar_length", "m", 1.524, positive(),
+        "length L of the bar: the wheel track (the rates act at the wheels)"},
        PC_EKF_FIELD(bar_length)},
       {{"bar_inertia", "kg m^2", 63.3316, positive(), "inertia I of the bar about its middle"},
        PC_EKF_FIELD(bar_inertia)},
@@ -73,6 +74,10 @@ FieldTable<RollPlaneFields> parameterFields() {
       {{"anti_roll_bar", "N/m", 0.0, nonNegative(),
         "k_a: the anti-roll bar's force at each end per metre of travel difference"},
        PC_EKF_FIELD(anti_roll_bar)},
+      {{"body_cg_offset", "m", 0.0, anyValue(),
+        "e_b: the empty body's centre of mass left of the middle of the mounts (REP 103 y; "
+        "it sits at L/2 - e_b from the left end)"},
+       PC_EKF_FIELD(body_cg_offset)},
   });
 }
 
@@ -98,7 +103,7 @@ const ModelDescription& rollPlaneDescription() {
       "(docs/method.md §1).",
       fields().parameters().table(),
       fields().settings().table(),
-      {damperChoice()},
+      {damperChoiceWithTable()},
       {"x1", "x2", "xr1", "xr2", "x1dot", "x2dot", "xr1dot", "xr2dot"},
       {{"u1", "m", "suspension extension x1 - xr1, left"},
        {"u2", "m", "suspension extension x2 - xr2, right"},
@@ -130,11 +135,43 @@ VehicleParameters VehicleParameters::fromVector(const Eigen::Ref<const Eigen::Ve
 }
 
 VehicleParameters VehicleParameters::from(const ModelParameters& m) {
-  return fields().from<VehicleParameters>(rollPlaneDescription(), m, "VehicleParameters::from");
+  VehicleParameters p =
+      fields().from<VehicleParameters>(rollPlaneDescription(), m, "VehicleParameters::from");
+  rollPlaneDamperCurves(m, p.damper_curve);
+  return p;
 }
 
 ModelParameters VehicleParameters::toModelParameters() const {
-  return fields().toModelParameters(*this);
+  ModelParameters m = fields().toModelParameters(*this);
+  if (damper == DamperLaw::kTable) {
+    for (int i = 0; i < 2; ++i) {
+      const DamperCurve& c = damper_curve[i];
+      Eigen::MatrixXd points(2, static_cast<Eigen::Index>(c.velocity().size()));
+      for (std::size_t j = 0; j < c.velocity().size(); ++j) {
+        points(0, static_cast<Eigen::Index>(j)) = c.velocity()[j];
+        points(1, static_cast<Eigen::Index>(j)) = c.force()[j];
+      }
+      m.tables[kDamperTableNames[i]] = points;
+    }
+  }
+  return m;
+}
+
+const char* const kDamperTableNames[2] = {"damper_table_left", "damper_table_right"};
+
+void rollPlaneDamperCurves(const ModelParameters& m, DamperCurve out[2]) {
+  if (damperLaw(m.choice(rollPlaneDescription(), "damper")) != DamperLaw::kTable) {
+    out[0] = out[1] = DamperCurve();
+    return;
+  }
+  for (int i = 0; i < 2; ++i) {
+    const auto it = m.tables.find(kDamperTableNames[i]);
+    if (it == m.tables.end()) {
+      throw std::invalid_argument(std::string("roll plane: damper table but no ") +
+                                  kDamperTableNames[i]);
+    }
+    out[i] = DamperCurve(it->second, std::string("roll plane: ") + kDamperTableNames[i]);
+  }
 }
 
 }  // namespace pc_ekf

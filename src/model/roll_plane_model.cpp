@@ -49,6 +49,7 @@ struct ConstantPointers {
   const double *static_moment;   // S g tan(phi_s)
   const double *gravity;
   const double *transfer;        // Delta F_y / a_y = ((m + M) h_P + sum m_t r_w) / L
+  const DamperCurve* curve[2] = {nullptr, nullptr};  // the table law's curves
 };
 
 // The constants in one Q x kCount table (one allocation per prepare()).
@@ -90,6 +91,15 @@ struct PointConstants : PointConstantTable {
   }
 };
 
+// The damper force of suspension i at point q: c * scale * tanh(rate v),
+// c v, or c / c_ref * curve(v) (the damping column holds c / c_ref).
+template <DamperLaw law>
+inline double damperAt(const ConstantPointers& c, int i, Eigen::Index q, double tanh_rate,
+                       double v) {
+  if (law == DamperLaw::kTable) return c.damping[i][q] * (*c.curve[i])(v);
+  return damperForce<law>(c.damping[i][q], tanh_rate, v);
+}
+
 // Paper eq. 40-41 solved for the body-end accelerations, and eq. 42-43. `lever`
 // is cos(theta_s + theta). Shared by the per-point and the vectorised loops so
 // both give the same bits.
@@ -120,7 +130,7 @@ inline void suspensionForces(const ConstantPointers& c, Eigen::Index q, double t
     const double u = s[i * s_stride] - s[(2 + i) * s_stride];
     const double v = s[(4 + i) * s_stride] - s[(6 + i) * s_stride];
     f[i] = -springIncrement(u, c.k[i][q], c.k3[i][q], c.three_delta[i][q], c.three_delta_sq[i][q]) -
-           damperForce<law>(c.damping[i][q], tanh_rate, v);
+           damperAt<law>(c, i, q, tanh_rate, v);
   }
 }
 
@@ -217,6 +227,13 @@ __attribute__((always_inline)) inline bool soaDerivatives(const ConstantPointers
       for (Eigen::Index j = 0; j < 2 * n; ++j) t[j] = fastTanh(t[j]);
     }
   }
+  if (law == DamperLaw::kTable) {  // the curves in place; c * curve below
+    double* __restrict t = d + 4 * n;
+    for (int i = 0; i < 2; ++i) {
+      const DamperCurve& curve = *c.curve[i];
+      for (Eigen::Index q = 0; q < n; ++q) t[i * n + q] = curve(t[i * n + q]);
+    }
+  }
   long beyond_series = 0;
 #pragma GCC ivdep
   for (Eigen::Index q = 0; q < n; ++q) {
@@ -244,27 +261,54 @@ __attribute__((always_inline)) inline bool soaDerivatives(const ConstantPointers
 // every point's value is independent of the batch it is in (the vector body
 // and the remainder loop contract the same expressions).
 __attribute__((target_clones("arch=x86-64-v3", "default"))) bool soaDerivativesDispatch(
-    const ConstantPointers& c, bool tanh_law, double tanh_rate, double road0, double road1,
+    const ConstantPointers& c, DamperLaw law, double tanh_rate, double road0, double road1,
     const double* __restrict y, double* __restrict d, Eigen::Index n) {
-  return tanh_law ? soaDerivatives<DamperLaw::kTanh>(c, tanh_rate, road0, road1, y, d, n)
-                  : soaDerivatives<DamperLaw::kLinear>(c, tanh_rate, road0, road1, y, d, n);
+  switch (law) {
+    case DamperLaw::kTanh:
+      return soaDerivatives<DamperLaw::kTanh>(c, tanh_rate, road0, road1, y, d, n);
+    case DamperLaw::kTable:
+      return soaDerivatives<DamperLaw::kTable>(c, tanh_rate, road0, road1, y, d, n);
+    default:
+      return soaDerivatives<DamperLaw::kLinear>(c, tanh_rate, road0, road1, y, d, n);
+  }
+}
+
+// pointDerivatives for the batch's law.
+inline void lawPointDerivatives(DamperLaw law, const ConstantPointers& c, Eigen::Index q,
+                                double tanh_rate, double road0, double road1, const double* s,
+                                Eigen::Index s_stride, double* d, Eigen::Index d_stride) {
+  switch (law) {
+    case DamperLaw::kTanh:
+      return pointDerivatives<DamperLaw::kTanh>(c, q, tanh_rate, road0, road1, s, s_stride, d,
+                                                d_stride);
+    case DamperLaw::kTable:
+      return pointDerivatives<DamperLaw::kTable>(c, q, tanh_rate, road0, road1, s, s_stride, d,
+                                                 d_stride);
+    default:
+      return pointDerivatives<DamperLaw::kLinear>(c, q, tanh_rate, road0, road1, s, s_stride, d,
+                                                  d_stride);
+  }
 }
 
 class RollPlaneBatch : public ModelBatch {
  public:
   // elevated: heights, a bar or a horizontal motion at some point (the
   // general right-hand side for every point).
-  RollPlaneBatch(PointConstants c, DamperLaw law, double tanh_rate,
+  RollPlaneBatch(PointConstants c, DamperLaw law, double tanh_rate, const DamperCurve curves[2],
                  std::shared_ptr<const ContactRoad> road, bool elevated,
                  std::unique_ptr<RollPlaneReadings> readings = nullptr)
       : c_(std::move(c)),
         p_(c_.pointers()),
         law_(law),
         tanh_rate_(tanh_rate),
+        curves_{curves[0], curves[1]},
         road_(std::move(road)),
         motion_(road_->horizontalMotion()),
         elevated_(elevated),
-        r_(std::move(readings)) {}
+        r_(std::move(readings)) {
+    p_.curve[0] = &curves_[0];
+    p_.curve[1] = &curves_[1];
+  }
   RollPlaneBatch(const RollPlaneBatch&) = delete;
   RollPlaneBatch& operator=(const RollPlaneBatch&) = delete;
 
@@ -325,13 +369,7 @@ class RollPlaneBatch : public ModelBatch {
       return;
     }
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
-      if (law_ == DamperLaw::kTanh) {
-        pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1,
-                                           &dydt(0, q), 1);
-      } else {
-        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1,
-                                             &dydt(0, q), 1);
-      }
+      lawPointDerivatives(law_, p_, q, tanh_rate_, road[0], road[1], &y(0, q), 1, &dydt(0, q), 1);
     }
   }
 
@@ -350,20 +388,14 @@ class RollPlaneBatch : public ModelBatch {
       elevatedDerivatives(t, road, y.data(), n, 1, dydt.data(), n, 1);
       return;
     }
-    const bool beyond_series = soaDerivativesDispatch(p_, law_ == DamperLaw::kTanh, tanh_rate_,
+    const bool beyond_series = soaDerivativesDispatch(p_, law_, tanh_rate_,
                                                       road[0], road[1], y.data(), dydt.data(), n);
     if (!beyond_series) return;
     // Rolls beyond the series' range (wild parameters, diverging points): redo
     // those points with the library cos.
     for (Eigen::Index q = 0; q < n; ++q) {
       if (cosOfSumSeriesValid((y(q, 1) - y(q, 0)) * p_.inv_length[q])) continue;
-      if (law_ == DamperLaw::kTanh) {
-        pointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], &y(q, 0), n,
-                                           &dydt(q, 0), n);
-      } else {
-        pointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road[0], road[1], &y(q, 0), n,
-                                             &dydt(q, 0), n);
-      }
+      lawPointDerivatives(law_, p_, q, tanh_rate_, road[0], road[1], &y(q, 0), n, &dydt(q, 0), n);
     }
   }
 
@@ -380,6 +412,10 @@ class RollPlaneBatch : public ModelBatch {
       if (law_ == DamperLaw::kTanh) {
         elevatedPointDerivatives<DamperLaw::kTanh>(p_, q, tanh_rate_, road[0], road[1], a_y,
                                                    y + q * step, stride, d + q * d_step, d_stride);
+      } else if (law_ == DamperLaw::kTable) {
+        elevatedPointDerivatives<DamperLaw::kTable>(p_, q, tanh_rate_, road[0], road[1], a_y,
+                                                    y + q * step, stride, d + q * d_step,
+                                                    d_stride);
       } else {
         elevatedPointDerivatives<DamperLaw::kLinear>(p_, q, tanh_rate_, road[0], road[1], a_y,
                                                      y + q * step, stride, d + q * d_step,
@@ -392,6 +428,7 @@ class RollPlaneBatch : public ModelBatch {
   ConstantPointers p_;
   DamperLaw law_;
   double tanh_rate_;
+  DamperCurve curves_[2];  // law_ == kTable (p_.curve points here)
   std::shared_ptr<const ContactRoad> road_;
   const HorizontalMotion* motion_;  // owned by road_; null: a_y = 0
   bool elevated_;
@@ -421,7 +458,10 @@ RollPlaneModel::RollPlaneModel(ModelParameters nominal, std::shared_ptr<const Co
   // Tare offsets depend on each point's parameters: readings as states.
   if (readings_.zero == ZeroConvention::kTare) readings_.as_states = true;
   checkModelOnRoad(*this, road_.get(), "RollPlaneModel");
-  checkDamperSettings("RollPlaneModel", damper_, tanh_scale_, tanh_rate_);
+  if (damper_ != DamperLaw::kTable) {
+    checkDamperSettings("RollPlaneModel", damper_, tanh_scale_, tanh_rate_);
+  }
+  rollPlaneDamperCurves(nominal_, curve_);
   if (readings_.as_states) {
     // Each channel's reading is a state row after the dynamic ones.
     for (const std::string& c : rollPlaneDescription().channelNames()) {
@@ -452,20 +492,30 @@ std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd
   static const RollPlaneFields<int>& at = rollPlaneRows();  // once: it runs for every point
   if (params.size() == table.size() && table.admissible(params.data())) {
     const double largest = params.cwiseAbs().maxCoeff();
-    if ((params[at.added_mass] >= 0.0) & (largest < 1e150)) return "";
+    if ((params[at.added_mass] >= 0.0) & (largest < 1e150) &
+        (std::abs(params[at.body_cg_offset]) <= 0.5 * params[at.bar_length])) {
+      return "";
+    }
   }
   const std::string why = table.violation(params);
   if (!why.empty()) return why;
   const auto& names = table.names();
   const double m = params[at.bar_mass], length = params[at.bar_length],
                mass = params[at.added_mass], pos = params[at.added_mass_position];
+  const double offset = params[at.body_cg_offset];
+  if (!(std::abs(offset) <= 0.5 * length)) {
+    return outOfDomain(names[at.body_cg_offset], offset,
+                       "puts the body's centre beyond the mounts (bar_length = " +
+                           domainNumber(length) + ")");
+  }
   if (mass + m <= 0.0) {
     return outOfDomain(names[at.added_mass], mass,
                        "makes the total mass <= 0 (bar_mass = " + domainNumber(m) + ")");
   }
   // A negative added mass can still make the combined inertia non-positive.
-  const double cg = (mass * pos + m * 0.5 * length) / (mass + m);
-  const double inertia = params[at.bar_inertia] + m * (0.5 * length - cg) * (0.5 * length - cg) +
+  const double body = 0.5 * length - offset;  // the body's centre from the left end
+  const double cg = (mass * pos + m * body) / (mass + m);
+  const double inertia = params[at.bar_inertia] + m * (body - cg) * (body - cg) +
                          mass * (cg - pos) * (cg - pos) +
                          m * params[at.body_cg_height] * params[at.body_cg_height] +
                          mass * params[at.added_mass_height] * params[at.added_mass_height];
@@ -494,7 +544,12 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
   const RollPlaneFields<int>& at = rollPlaneRows();
   PointConstants c(count);
   using C = PointConstants;
-  const double scale = damper_ == DamperLaw::kTanh ? tanh_scale_ : 1.0;
+  // tanh: c scale; linear: c; table: c / c_ref (the curve gives the force).
+  double scale[2] = {1.0, 1.0};
+  for (int i = 0; i < 2; ++i) {
+    if (damper_ == DamperLaw::kTanh) scale[i] = tanh_scale_;
+    if (damper_ == DamperLaw::kTable) scale[i] = 1.0 / curve_[i].referenceDamping();
+  }
   const HorizontalMotion* motion = road_->horizontalMotion();
   bool elevated = motion && motion->accelerates();
   for (int q = 0; q < count; ++q) {
@@ -508,14 +563,14 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
       c(q, C::kK3 + i) = p[at.spring_cubic[i]];
       c(q, C::kThreeDelta + i) = 3.0 * delta;
       c(q, C::kThreeDeltaSq + i) = 3.0 * delta * delta;
-      c(q, C::kDamping + i) = p[at.damping[i]] * scale;
+      c(q, C::kDamping + i) = p[at.damping[i]] * scale[i];
       c(q, C::kTyre + i) = p[at.tyre_stiffness[i]];
       c(q, C::kInvUnsprung + i) = 1.0 / p[at.unsprung_mass[i]];
     }
-    // I_cg = I + m (L/2 - D)^2 + M (D - d_CG)^2 (docs/method.md §1.4).
+    // I_cg = I + m (L/2 - e_b - D)^2 + M (D - d_CG)^2 (docs/method.md §1.4).
     const double position = p[at.added_mass_position];
-    double inertia = p[at.bar_inertia] +
-                     p[at.bar_mass] * (0.5 * length - cg) * (0.5 * length - cg) +
+    const double body = 0.5 * length - p[at.body_cg_offset];
+    double inertia = p[at.bar_inertia] + p[at.bar_mass] * (body - cg) * (body - cg) +
                      p[at.added_mass] * (cg - position) * (cg - position);
     // J = I_cg + m h_b^2 + M h_M^2, S = m h_b + M h_M (docs/models.md).
     const double moment = p[at.bar_mass] * p[at.body_cg_height] +
@@ -550,7 +605,7 @@ std::unique_ptr<ModelBatch> RollPlaneModel::prepare(const Eigen::MatrixXd& param
     r = readingConstants(params, equilibria);
     r->elevated = elevated || (r->imu_height != 0.0).any();
   }
-  return std::make_unique<RollPlaneBatch>(std::move(c), damper_, tanh_rate_, road_, elevated,
+  return std::make_unique<RollPlaneBatch>(std::move(c), damper_, tanh_rate_, curve_, road_, elevated,
                                           std::move(r));
 }
 

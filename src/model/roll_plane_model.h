@@ -50,10 +50,17 @@ struct RollPlaneFields {
   T wheel_radius{};       // r_w
   T imu_height{};         // z_I
   T anti_roll_bar{};      // k_a, N/m of travel difference
+  T body_cg_offset{};     // e_b: the empty body's centre left of the mounts' middle
   // Settings.
   T damper_tanh_scale{};  // F_C = c * scale * tanh(rate * v)
   T damper_tanh_rate{};
 };
+// The ModelParameters::tables names of the damper curves, left and right.
+extern const char* const kDamperTableNames[2];
+// The curves of `m` when its damper law is table (std::invalid_argument when
+// one is missing or bad), else empty curves.
+void rollPlaneDamperCurves(const ModelParameters& m, DamperCurve out[2]);
+
 // Where prepare() and the model's rules read each value: a parameter's row
 // in the parameter vector, a setting's in the settings.
 const RollPlaneFields<int>& rollPlaneRows();
@@ -65,6 +72,9 @@ const RollPlaneFields<int>& rollPlaneRows();
 struct VehicleParameters : RollPlaneFields<double> {
   VehicleParameters();
   DamperLaw damper = DamperLaw::kTanh;
+  // damper == kTable: the measured curves at the wheels, left and right
+  // (ModelParameters::tables damper_table_left, damper_table_right).
+  DamperCurve damper_curve[2];
 
   Eigen::VectorXd toVector() const;
   static VehicleParameters fromVector(const Eigen::Ref<const Eigen::VectorXd>& v,
@@ -132,6 +142,7 @@ class RollPlaneModel : public MechanicalModel {
   ModelParameters nominal_;  // values: the nominal parameter vector
   DamperLaw damper_;
   double tanh_scale_, tanh_rate_;
+  DamperCurve curve_[2];  // damper_ == kTable
   ReadingSettings readings_;
   std::vector<std::string> state_names_;
   Eigen::MatrixXd h_;

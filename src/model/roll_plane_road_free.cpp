@@ -22,6 +22,7 @@ struct RoadFreeConstants {
   std::vector<Point> points;
   DamperLaw law = DamperLaw::kTanh;
   double tanh_rate = 0.0;
+  DamperCurve curve[2];  // law kTable: damping holds c / c_ref
   // Where the optional inputs are (-1: not read): the gyro, and speed and
   // yaw rate, whose product is the lateral acceleration a_y.
   int gyro = -1, speed = -1, yaw = -1;
@@ -50,9 +51,10 @@ double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Poi
   for (int i = 0; i < 2; ++i) {
     x[i] = p.delta_ref[i] - in[kU1 + i];  // spring compression
     const double v = in[kV1 + i];
-    const double damper = c.law == DamperLaw::kTanh
-                              ? damperForce<DamperLaw::kTanh>(p.damping[i], c.tanh_rate, v)
-                              : damperForce<DamperLaw::kLinear>(p.damping[i], c.tanh_rate, v);
+    const double damper =
+        c.law == DamperLaw::kTanh    ? damperForce<DamperLaw::kTanh>(p.damping[i], c.tanh_rate, v)
+        : c.law == DamperLaw::kTable ? p.damping[i] * c.curve[i](v)
+                                     : damperForce<DamperLaw::kLinear>(p.damping[i], c.tanh_rate, v);
     f[i] = p.k[i] * x[i] + p.k3[i] * x[i] * x[i] * x[i] - damper;
   }
   if (!c.elevated) {
@@ -213,7 +215,14 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
   auto c = std::make_unique<RoadFreeConstants>();
   c->law = nominal_.damper;
   c->tanh_rate = nominal_.damper_tanh_rate;
-  const double scale = nominal_.damper == DamperLaw::kTanh ? nominal_.damper_tanh_scale : 1.0;
+  double scale[2] = {1.0, 1.0};
+  for (int i = 0; i < 2; ++i) {
+    if (nominal_.damper == DamperLaw::kTanh) scale[i] = nominal_.damper_tanh_scale;
+    if (nominal_.damper == DamperLaw::kTable) {
+      c->curve[i] = nominal_.damper_curve[i];
+      scale[i] = 1.0 / c->curve[i].referenceDamping();
+    }
+  }
   for (Eigen::Index q = 0; q < params.cols(); ++q) {
     const std::string why = invalidReason(params.col(q));
     if (!why.empty()) {
@@ -242,12 +251,13 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
     for (int i = 0; i < 2; ++i) {
       a.k[i] = p[at.spring_linear[i]];
       a.k3[i] = p[at.spring_cubic[i]];
-      a.damping[i] = p[at.damping[i]] * scale;
+      a.damping[i] = p[at.damping[i]] * scale[i];
       a.delta_ref[i] = tare ? unloaded[static_cast<std::size_t>(q)].spring_compression[i]
                             : e.spring_compression[i];
     }
     const double position = p[at.added_mass_position];
-    double inertia = p[at.bar_inertia] + p[at.bar_mass] * (0.5 * L - cg) * (0.5 * L - cg) +
+    const double body = 0.5 * L - p[at.body_cg_offset];  // the body's centre from the left end
+    double inertia = p[at.bar_inertia] + p[at.bar_mass] * (body - cg) * (body - cg) +
                      p[at.added_mass] * (cg - position) * (cg - position);
     const double h_b = p[at.body_cg_height], h_m = p[at.added_mass_height];
     a.bar = p[at.anti_roll_bar];

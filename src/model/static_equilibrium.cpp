@@ -139,7 +139,9 @@ std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& para
     const double total = p[at.bar_mass] + p[at.added_mass];
     const double length = p[at.bar_length];
     e.combined_cg =
-        (p[at.added_mass] * p[at.added_mass_position] + p[at.bar_mass] * 0.5 * length) / total;
+        (p[at.added_mass] * p[at.added_mass_position] +
+         p[at.bar_mass] * (0.5 * length - p[at.body_cg_offset])) /
+        total;
     const double weight = total * p[at.gravity];
     // W_1 from (L - D) rather than weight - W_2: same value, exactly symmetric at D = L/2.
     e.load[0] = weight * (length - e.combined_cg) / length;

@@ -47,12 +47,26 @@ const char* kBranches =
     "    - {type: turn, duration: 2.0, radius: -30.0, ramp: 0.5}\n"
     "    - {type: lane_change, duration: 2.0, lateral_acceleration: 4.0, surface: iso8608}\n"
     "    - {type: slalom, duration: 2.0, frequency: 0.5}\n"
+    "vehicle:\n"
+    "  motion_ratio_left: 0.8\n"
+    "  motion_ratio_right: 0.8\n"
+    "  damper_table_left: {bump: [[0.5, 400]], rebound: [[0.5, 900]]}\n"
+    "  damper_table_right: {bump: [[0.5, 400]], rebound: [[0.5, 900]]}\n"
     "truth:\n"
     "  vehicle: {bar_mass: 590.0}\n"
     "  road: {source: sine}\n"
     "  schedule:\n"
     "    - {time: 1.0, xi: [0.1]}\n"
     "    - {time: 2.0, values: {added_mass: 240.0}}\n";
+
+// The datasheet forms not in kBranches (the shared damper table).
+const char* kDatasheet =
+    "vehicle:\n"
+    "  motion_ratio_left: 0.8\n"
+    "  motion_ratio_right: 0.8\n"
+    "  damper_table: {bump: [[0.5, 400]], rebound: [[0.5, 900]]}\n"
+    "uncertain:\n"
+    "  - {name: added_mass, relative_range: 0.5}\n";
 
 const char* kFullCar =
     "model: {type: full_car}\n"
@@ -79,7 +93,23 @@ std::string tablePath(const std::string& read_path) {
   const auto after = [&](const std::string& prefix) {
     return startsWith(p, prefix) && p.size() > prefix.size();
   };
-  if (after("vehicle.")) return "vehicle.<name>";
+  if (after("vehicle.")) {
+    // The datasheet forms (one row each; <side> a suffix of spring_linear_).
+    static const std::regex sided(
+        "vehicle\\.(motion_ratio|damper_motion_ratio|spring_rate|spring_cubic_rate|damper_rate)_"
+        "[a-z]+");
+    static const std::regex table("vehicle\\.damper_table_[a-z]+(\\..*)?");
+    static const std::set<std::string> own = {"vehicle.damper_table", "vehicle.wheel_track",
+                                              "vehicle.spring_track", "vehicle.wheelbase",
+                                              "vehicle.front_axle_load_share"};
+    std::smatch m;
+    if (std::regex_match(p, m, sided)) return "vehicle." + m[1].str() + "_<side>";
+    if (std::regex_match(p, m, table)) {
+      return m[1].str().empty() ? "vehicle.damper_table_<side>" : "vehicle.damper_table" + m[1].str();
+    }
+    if (own.count(p) || startsWith(p, "vehicle.damper_table.")) return p;
+    return "vehicle.<name>";
+  }
   if (after("truth.vehicle.")) return "truth.vehicle.<name>";
   if (after("truth.schedule[i].values.")) return "truth.schedule[i].values.<name>";
   if (after("node.joints.")) return "node.joints.<suspension>";
@@ -143,7 +173,7 @@ bool sameUpToNote(const std::string& documented, const std::string& code) {
 
 TEST(ConfigSchema, EveryKeyTheParserAcceptsIsInTheTable) {
   const auto table = tableByPath();
-  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar})) {
+  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar, kDatasheet})) {
     if (!isKey(rec)) continue;
     EXPECT_TRUE(table.count(path))
         << "the parser accepts '" << path << "' but src/io/config_schema.cpp does not list it";
@@ -151,7 +181,7 @@ TEST(ConfigSchema, EveryKeyTheParserAcceptsIsInTheTable) {
 }
 
 TEST(ConfigSchema, EveryKeyInTheTableIsAccepted) {
-  const auto keys = recorded({kDefaults, kBranches, kFullCar});
+  const auto keys = recorded({kDefaults, kBranches, kFullCar, kDatasheet});
   for (const ConfigKey& k : configSchema()) {
     if (kReadBeforeTheReader.count(k.path)) continue;
     const auto it = keys.find(k.path);
@@ -176,7 +206,7 @@ TEST(ConfigSchema, TypesAreWhatTheParserReads) {
       {"number or list", {"number", "numbers"}},
       {"map", {"map"}},             {"list", {"list"}}};
   const auto table = tableByPath();
-  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar})) {
+  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar, kDatasheet})) {
     if (!isKey(rec) || !table.count(path)) continue;
     std::set<std::string> words;  // "number or numbers" -> {number, numbers}
     const std::string type = table.at(path)->type;

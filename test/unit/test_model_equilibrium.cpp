@@ -75,7 +75,7 @@ TEST(StaticEquilibrium, NonFiniteInputThrows) {
 
 TEST(VehicleParametersVector, OrderAndRoundTrip) {
   const RollPlaneModel model = makeModel();
-  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 23u);
+  ASSERT_EQ(rollPlaneDescription().parameters().names().size(), 24u);
   EXPECT_EQ(model.parameterIndex("bar_mass"), 0);
   EXPECT_EQ(model.parameterIndex("spring_cubic_right"), 8);
   EXPECT_EQ(model.parameterIndex("gravity"), 13);
@@ -84,6 +84,7 @@ TEST(VehicleParametersVector, OrderAndRoundTrip) {
   EXPECT_EQ(model.parameterIndex("imu_position"), 16);
   EXPECT_EQ(model.parameterIndex("body_cg_height"), 17);  // the heights and bar after them
   EXPECT_EQ(model.parameterIndex("anti_roll_bar"), 22);
+  EXPECT_EQ(model.parameterIndex("body_cg_offset"), 23);  // last: the vector before it unchanged
   EXPECT_EQ(model.parameterIndex("no_such_parameter"), -1);
 
   VehicleParameters p = at(0.3, 0.7);
