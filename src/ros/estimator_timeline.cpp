@@ -13,7 +13,10 @@ TimelineSettings timelineSettings(const EstimatorConfig& c) {
   TimelineSettings s;
   s.road_topic_required = c.road.source == RoadSource::kTopic;
   s.road_free = c.road.source == RoadSource::kNone;
-  s.analytic_interval = 0.0;  // the stream's own: its first two stamps (never sampling:)
+  // An analytic road is the config's own synthetic road: its origin one
+  // `sampling` interval before the first sample, at once (a live node must
+  // not hold back its first estimate). Road-free: the stream's own interval.
+  s.analytic_interval = s.road_free ? 0.0 : c.sampling.interval();
   s.time_jump_tolerance = c.node.time_jump_tolerance;
   s.road_wait_timeout = c.node.road_wait_timeout;
   s.max_pending = static_cast<std::size_t>(c.node.max_pending_samples);

@@ -45,8 +45,9 @@ struct TimelineSettings {
   // sample sets the origin at once, and road messages are ignored.
   bool road_free = false;
   // The sample interval (s) that puts the analytic origin before the first
-  // sample; 0: the stream's own, the interval between its first two
-  // stamps (the first sample waits for the second; the node's).
+  // sample (an analytic road: the config's sampling interval); 0: the
+  // stream's own, the interval between its first two stamps (road-free: the
+  // first sample waits for the second).
   double analytic_interval = 0.0;
   double time_jump_tolerance = 0.5;  // s
   double road_wait_timeout = 0.5;    // s of wall clock
@@ -55,8 +56,8 @@ struct TimelineSettings {
   int contacts = 2;                  // road heights per road message (the model's contacts)
 };
 
-// The settings the config's node: section gives (the analytic origin's
-// interval is the stream's: sampling: describes synthetic drives only).
+// The settings the config's node: section gives (the origin's interval: an
+// analytic road's is the config's sampling interval, road-free the stream's).
 TimelineSettings timelineSettings(const EstimatorConfig& config);
 
 // A sample the filter may process now, its time set (s since the origin).
