@@ -198,13 +198,13 @@ class FullCarModel : public MechanicalModel {
   const ContactRoad& road() const { return *road_; }
   const ContactRoad* contactRoad() const override { return road_.get(); }
 
- private:
   // The equilibrium at params (a Newton solve), memoised per thread: the
   // forecast asks invalidReason for each point and then prepares the same
-  // points on the same thread, so each point is solved once, not twice.
-  // Throws what solveFullCarEquilibrium throws.
+  // points on the same thread, so each point is solved once, not twice (the
+  // road-free model asks it too). Throws what solveFullCarEquilibrium throws.
   FullCarEquilibrium equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const;
 
+ private:
   std::unique_ptr<FullCarReadings> readingConstants(const Eigen::MatrixXd& params) const;
 
   FullCarParameters nominal_;  // the laws and the nominal geometry of H

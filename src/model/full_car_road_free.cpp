@@ -296,12 +296,13 @@ std::unique_ptr<FullCarRoadFreeConstants> FullCarRoadFreeModel::constants(
     }
     const FullCarColumn p(&params(0, q));
     const FullCarFields<int>& at = p.at();
-    const FullCarEquilibrium e = solveFullCarEquilibrium(p);
+    // Memoised (invalidReason above solved this point already).
+    const FullCarEquilibrium e = with_road_.equilibrium(params.col(q));
     FullCarEquilibrium e0;
     if (tare) {
       Eigen::VectorXd empty = params.col(q);
       empty[at.added_mass] = 0.0;
-      e0 = solveFullCarEquilibrium(FullCarColumn(empty.data()));
+      e0 = with_road_.equilibrium(empty);
     }
     FullCarRoadFreeConstants::Point a{};
     for (int i = 0; i < 4; ++i) {
