@@ -15,6 +15,11 @@
 #                            road: the paper bump, N = 100 over 3 s, synthesised
 #   full_car_live_rtf_end_to_end  config/full_car_live.yaml likewise (n = 13, the
 #                            full car's speed bump)
+#   full_car_imu_rtf_end_to_end  config/full_car_imu.yaml (road-free full car with
+#                            heights, bars, odometry, n = 14) on its own synthetic
+#                            10 s, 200 Hz drive (a braking, a lane change), read as a CSV
+#   driving_rtf_end_to_end   config/turns.yaml (roll plane with heights and a bar on
+#                            its course of turns, n = 3) sampled at 200 Hz over 10 s
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/common.sh"
@@ -54,6 +59,18 @@ if "$bin/synthesize_bag" --config "$imu" --output "$out/road_free.bag" --csv "$o
   2>"$out/road_free_synthesis.err"; then
   road_free_wall=$(walls "$imu" road_free --measurements "$out/road_free.csv")
 fi
+car_imu=$PC_EKF_ROOT/config/full_car_imu.yaml
+car_imu_wall=null
+if "$bin/synthesize_bag" --config "$car_imu" --output "$out/full_car_imu.bag" \
+  --csv "$out/full_car_imu.csv" 2>"$out/full_car_imu_synthesis.err"; then
+  car_imu_wall=$(walls "$car_imu" full_car_imu --measurements "$out/full_car_imu.csv")
+fi
+# turns.yaml as shipped but sampled at 200 Hz over 10 s (its synthetic drive).
+driving_wall=null
+sed -E "s/^sampling: .*/sampling: {samples: 2000, duration: 10.0}/" \
+  "$PC_EKF_ROOT/config/turns.yaml" >"$out/driving.yaml" &&
+  grep -q "samples: 2000" "$out/driving.yaml" &&
+  driving_wall=$(walls "$out/driving.yaml" driving)
 # The shipped live configs, every section as shipped but the road (a topic
 # there): the speed bump, N = 100 over 3 s.
 as_shipped_on_bump() {  # as_shipped_on_bump CONFIG OUT
@@ -68,14 +85,14 @@ as_shipped_on_bump "$PC_EKF_ROOT/config/vehicle_live.yaml" "$out/live.yaml" &&
 as_shipped_on_bump "$PC_EKF_ROOT/config/full_car_live.yaml" "$out/full_car_live.yaml" &&
   car_live_wall=$(walls "$out/full_car_live.yaml" full_car_live)
 /usr/bin/python3 - "$out/end_to_end.json" "$n11_wall" "$car_wall" "$paper_wall" "$runs" \
-  "$road_free_wall" "$live_wall" "$car_live_wall" <<'PY'
+  "$road_free_wall" "$live_wall" "$car_live_wall" "$car_imu_wall" "$driving_wall" <<'PY'
 import json, statistics, sys
-path, n11, car, paper, runs, road_free, live, car_live = sys.argv[1:]
+path, n11, car, paper, runs, road_free, live, car_live, car_imu, driving = sys.argv[1:]
 def each(w):
     return None if w == "null" else [float(x) for x in w.split(",")]
 def wall(w):
     return None if w == "null" else statistics.median(each(w))
-def rtf(w, duration=3.0):  # the records are 3 s long but road_free's 10 s
+def rtf(w, duration=3.0):  # the records are 3 s long but road_free's, full_car_imu's, driving's 10 s
     return None if w == "null" else duration / wall(w)
 json.dump({
     "rtf_n11_end_to_end": rtf(n11),
@@ -84,6 +101,10 @@ json.dump({
     "road_free_rtf_end_to_end": rtf(road_free, 10.0),
     "live_rtf_end_to_end": rtf(live),
     "full_car_live_rtf_end_to_end": rtf(car_live),
+    "full_car_imu_rtf_end_to_end": rtf(car_imu, 10.0),
+    "driving_rtf_end_to_end": rtf(driving, 10.0),
+    "full_car_imu_end_to_end_wall_s": wall(car_imu),
+    "driving_end_to_end_wall_s": wall(driving),
     "live_end_to_end_wall_s": wall(live),
     "full_car_live_end_to_end_wall_s": wall(car_live),
     "road_free_end_to_end_wall_s": wall(road_free),
@@ -91,7 +112,8 @@ json.dump({
     "full_car_tolerances_wall_s": wall(car),
     "paper_end_to_end_wall_s": wall(paper),
     "walls_s": {"n11": each(n11), "full_car_tolerances": each(car), "paper": each(paper),
-                "road_free": each(road_free), "live": each(live), "full_car_live": each(car_live)},
+                "road_free": each(road_free), "live": each(live), "full_car_live": each(car_live),
+                "full_car_imu": each(car_imu), "driving": each(driving)},
     "runs": int(runs),
     "statistic": "median",
     "command": "estimate_offline --config CFG --method one_step --out DIR, median wall time of the runs",

@@ -148,6 +148,11 @@ result = {
     # fed by rosbag play without a handshake).
     "live_rtf_end_to_end": end_to_end.get("live_rtf_end_to_end"),
     "full_car_live_rtf_end_to_end": end_to_end.get("full_car_live_rtf_end_to_end"),
+    # issue 45: driving as people drive (docs/models.md): the road-free full car
+    # with heights, bars and odometry, and the roll plane on its turns course,
+    # each on a 10 s, 200 Hz drive.
+    "full_car_imu_rtf_end_to_end": end_to_end.get("full_car_imu_rtf_end_to_end"),
+    "driving_rtf_end_to_end": end_to_end.get("driving_rtf_end_to_end"),
     "live_node_1khz_lost": node_live.get("node_samples_lost"),
     "live_node_1khz_max_lag_ms": node_live.get("node_max_lag_ms"),
     # issue 44: long_drive.yaml's 20 minutes through the node (lib/bench_long.sh).
@@ -383,6 +388,12 @@ row(f"live_rtf_end_to_end (estimate_offline, vehicle_live.yaml as shipped on the
 row(f"full_car_live_rtf_end_to_end (same, full_car_live.yaml, {e2e_n})",
     fmt(result["full_car_live_rtf_end_to_end"], "x"), ">= 30x",
     cmp(result["full_car_live_rtf_end_to_end"], ">=", 30))
+row(f"full_car_imu_rtf_end_to_end (estimate_offline, full_car_imu.yaml on a 10 s, 200 Hz CSV, {e2e_n})",
+    fmt(result["full_car_imu_rtf_end_to_end"], "x"), ">= 10x",
+    cmp(result["full_car_imu_rtf_end_to_end"], ">=", 10))
+row(f"driving_rtf_end_to_end (estimate_offline, turns.yaml at 200 Hz over 10 s, {e2e_n})",
+    fmt(result["driving_rtf_end_to_end"], "x"), ">= 10x",
+    cmp(result["driving_rtf_end_to_end"], ">=", 10))
 row("live_node_1khz_lost (estimator_node, vehicle_live.yaml as shipped, 1 kHz bag by rosbag play; "
     "worst run)",
     fmt(result["live_node_1khz_lost"]), "0", cmp(result["live_node_1khz_lost"], "<=", 0))

@@ -9,11 +9,15 @@
 namespace pc_ekf {
 namespace {
 
-// Rows of the roll plane's values in the full parameter vector.
+// Rows of the model's values in the full parameter vector: the roll plane's
+// (bar_mass, bar_length, unsprung_mass_left/right) or the full car's
+// (body_mass, track_width, unsprung_mass_front/rear, each per wheel: two
+// wheels an axle).
 struct RolloverRows {
   int bar_mass = -1, added_mass = -1, mount_height = -1, body_cg_height = -1,
       added_mass_height = -1, wheel_radius = -1, track = -1, gravity = -1;
   std::vector<int> unsprung;  // every unsprung_mass_*
+  double wheels_per_unsprung = 1.0;  // the full car's are per axle's wheel
   bool complete() const {
     return std::min({bar_mass, added_mass, mount_height, body_cg_height, added_mass_height,
                      wheel_radius, track, gravity}) >= 0 &&
@@ -26,13 +30,17 @@ RolloverRows rowsOf(const ParameterMapping& mapping) {
   const std::vector<std::string>& names = mapping.modelParameterNames();
   for (int i = 0; i < static_cast<int>(names.size()); ++i) {
     const std::string& n = names[i];
-    if (n == "bar_mass") r.bar_mass = i;
+    if (n == "bar_mass" || n == "body_mass") r.bar_mass = i;
     if (n == "added_mass") r.added_mass = i;
     if (n == "mount_height") r.mount_height = i;
     if (n == "body_cg_height") r.body_cg_height = i;
     if (n == "added_mass_height") r.added_mass_height = i;
     if (n == "wheel_radius") r.wheel_radius = i;
     if (n == "bar_length") r.track = i;  // the roll plane's track
+    if (n == "track_width") {
+      r.track = i;  // the full car's, w
+      r.wheels_per_unsprung = 2.0;
+    }
     if (n == "gravity") r.gravity = i;
     if (n.rfind("unsprung_mass", 0) == 0) r.unsprung.push_back(i);
   }
@@ -64,6 +72,7 @@ Eigen::MatrixXd rolloverValues(const ParameterMapping& mapping, const Eigen::Mat
     const double m = p(r.bar_mass), M = p(r.added_mass);
     double unsprung = 0.0;
     for (int i : r.unsprung) unsprung += p(i);
+    unsprung *= r.wheels_per_unsprung;
     const double first_moment = m * p(r.body_cg_height) + M * p(r.added_mass_height);  // S
     const double h = ((m + M) * p(r.mount_height) + first_moment + unsprung * p(r.wheel_radius)) /
                      (m + M + unsprung);

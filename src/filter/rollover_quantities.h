@@ -23,14 +23,17 @@ struct DerivedExpansions {
 // cg_height, static_stability_factor, rollover_threshold (in this order).
 const std::vector<std::string>& rolloverQuantityNames();
 
-// True when the model has the roll plane's heights and mount_height's
-// configured value is > 0: without heights there is no CG height.
+// True when the model has heights (the roll plane's or the full car's) and
+// mount_height's configured value is > 0: without heights there is no CG
+// height.
 bool hasRolloverQuantities(const ParameterMapping& mapping);
 
 // The quantities at full parameter vectors (model parameters x Q, the
 // model's order): 3 x Q. Requires hasRolloverQuantities(mapping).
 //   cg_height = ((m + M) h_P + m h_b + M h_M + sum m_u r_w) / (m + M + sum m_u)
-//   static_stability_factor = L / (2 cg_height), rollover_threshold = g SSF.
+//   static_stability_factor = track / (2 cg_height), rollover_threshold = g SSF,
+// m the body's mass, track = L (roll plane) or w (full car), the sum over
+// every wheel (the full car's four).
 Eigen::MatrixXd rolloverValues(const ParameterMapping& mapping, const Eigen::MatrixXd& full);
 
 // The germ rule the projection uses: tensor Gauss with order + 4 nodes per

@@ -58,7 +58,7 @@ std::shared_ptr<const ContactRoad> roadOf(const EstimatorConfig& cfg, const Road
         throw ConfigError(c.source + ": key 'road.series.file': " + e.what());
       }
     }
-    case RoadSource::kCourse: needTwo("course"); return std::make_shared<CourseRoad>(c.road.course);
+    case RoadSource::kCourse: return type.course(c.road.course, *c.modelParameters());
     case RoadSource::kIso8608:
       return type.drivenProfile(std::make_shared<Iso8608Profile>(c.road.iso8608),
                                 c.road.speed_kmh / 3.6, *c.modelParameters());

@@ -93,8 +93,16 @@ void readManoeuvre(YamlMapReader& e, const RoadConfig& road, std::size_t index,
                    CourseSegment& seg) {
   ManoeuvreSettings& m = seg.manoeuvre;
   seg.speed_kmh = road.speed_kmh;
-  e.number("speed_kmh", seg.speed_kmh, 0.0, 1000.0, true);
-  e.number("lateral_acceleration", m.lateral_acceleration, -kInf, kInf);
+  if (seg.isLongitudinal()) {
+    // brake: deceleration, accelerate: acceleration (m/s^2, > 0), from
+    // speed_kmh (an acceleration may start from a standstill).
+    e.number("speed_kmh", seg.speed_kmh, 0.0, 1000.0, seg.type == CourseSegment::Type::kBrake);
+    e.number(seg.type == CourseSegment::Type::kBrake ? "deceleration" : "acceleration",
+             m.longitudinal, 0.0, kInf, true);
+  } else {
+    e.number("speed_kmh", seg.speed_kmh, 0.0, 1000.0, true);
+    e.number("lateral_acceleration", m.lateral_acceleration, -kInf, kInf);
+  }
   if (seg.type == CourseSegment::Type::kTurn) {
     e.number("radius", m.radius, -kInf, kInf);
     e.number("ramp", m.ramp, 0.0, kInf);
@@ -157,15 +165,18 @@ std::vector<CourseSegment> readCourse(YamlMapReader& r, const RoadConfig& road) 
       e.unsignedInteger("seed", seg.iso8608.seed);
       e.number("correlation", seg.iso8608.correlation, 0.0, 1.0);
       duration();
-    } else if (type == "turn" || type == "lane_change" || type == "slalom") {
+    } else if (type == "turn" || type == "lane_change" || type == "slalom" || type == "brake" ||
+               type == "accelerate") {
       seg.type = type == "turn"          ? CourseSegment::Type::kTurn
                  : type == "lane_change" ? CourseSegment::Type::kLaneChange
-                                         : CourseSegment::Type::kSlalom;
+                 : type == "slalom"      ? CourseSegment::Type::kSlalom
+                 : type == "brake"       ? CourseSegment::Type::kBrake
+                                         : CourseSegment::Type::kAccelerate;
       readManoeuvre(e, road, i, seg);
       duration();
     } else {
       e.fail("type", "'" + type + "'",
-             "speed_bump, sine, rest, iso8608, turn, lane_change or slalom");
+             "speed_bump, sine, rest, iso8608, turn, lane_change, slalom, brake or accelerate");
     }
     e.finish();
     out.push_back(seg);

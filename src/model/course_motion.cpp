@@ -32,6 +32,24 @@ CourseMotion::CourseMotion(const std::vector<CourseSegment>& segments, std::vect
     const CourseSegment& s = segments_[i];
     speed_.push_back(speedOf(s));
     if (!s.isManoeuvre()) continue;
+    if (s.isLongitudinal()) {
+      const std::string who = "CourseRoad: segment " + std::to_string(i) + " (" +
+                              (s.type == CourseSegment::Type::kBrake ? "brake" : "accelerate") +
+                              ")";
+      if (!(speed_.back() >= 0.0) || !std::isfinite(speed_.back())) {
+        throw std::invalid_argument(who + ": speed_kmh must be finite and >= 0");
+      }
+      const double rate = s.manoeuvre.longitudinal;
+      if (!(rate > 0.0) || !std::isfinite(rate)) {
+        throw std::invalid_argument(who + ": the acceleration must be finite and > 0 m/s^2");
+      }
+      if (speed_.back() + s.longitudinalAcceleration() * s.duration < -1e-9) {
+        throw std::invalid_argument(who + ": stops before its end (speed_kmh / 3.6 < " +
+                                    "deceleration x duration)");
+      }
+      manoeuvres_ = true;
+      continue;
+    }
     manoeuvres_ = true;
     const std::string who = "CourseRoad: segment " + std::to_string(i) + " (manoeuvre)";
     const ManoeuvreSettings& m = s.manoeuvre;
@@ -48,6 +66,12 @@ CourseMotion::CourseMotion(const std::vector<CourseSegment>& segments, std::vect
         !(m.frequency > 0.0 && std::isfinite(m.frequency))) {
       throw std::invalid_argument(who + ": frequency must be finite and > 0");
     }
+  }
+  travelled_.push_back(0.0);
+  for (std::size_t i = 0; i < segments_.size(); ++i) {
+    const double d = start_[i + 1] - start_[i];
+    travelled_.push_back(travelled_.back() + speed_[i] * d +
+                         0.5 * segments_[i].longitudinalAcceleration() * d * d);
   }
 }
 
@@ -75,9 +99,42 @@ HorizontalState CourseMotion::at(double t) const {
   if (t < 0.0 || t >= start_.back()) return h;  // before and after the course: standing
   const std::size_t i = std::upper_bound(start_.begin(), start_.end(), t) - start_.begin() - 1;
   h.speed = speed_[i];
+  if (segments_[i].isLongitudinal()) {
+    h.longitudinal = segments_[i].longitudinalAcceleration();
+    h.speed = std::max(0.0, speed_[i] + h.longitudinal * (t - start_[i]));
+    return h;  // straight: a_y = 0
+  }
   h.lateral = lateral(segments_[i], h.speed, t - start_[i]);
   h.yaw_rate = h.speed > 0.0 ? h.lateral / h.speed : 0.0;  // a_y = V psi'
   return h;
+}
+
+double CourseMotion::distance(double t) const {
+  if (t <= 0.0) return 0.0;
+  if (t >= start_.back()) return travelled_.back();
+  const std::size_t i = std::upper_bound(start_.begin(), start_.end(), t) - start_.begin() - 1;
+  const double tau = t - start_[i];
+  return travelled_[i] + speed_[i] * tau +
+         0.5 * segments_[i].longitudinalAcceleration() * tau * tau;
+}
+
+double CourseMotion::timeAtDistance(double s) const {
+  if (s <= 0.0) return 0.0;
+  if (s >= travelled_.back()) return start_.back();
+  // The first segment whose end lies beyond s (moving there), then solve
+  // V tau + a tau^2 / 2 = s - its start.
+  const std::size_t i =
+      std::upper_bound(travelled_.begin(), travelled_.end(), s) - travelled_.begin() - 1;
+  const double rest = s - travelled_[i], v = speed_[i],
+               a = segments_[i].longitudinalAcceleration();
+  double tau = 0.0;
+  if (a == 0.0) {
+    tau = v > 0.0 ? rest / v : 0.0;
+  } else {
+    const double disc = std::max(0.0, v * v + 2.0 * a * rest);
+    tau = 2.0 * rest / (v + std::sqrt(disc));  // the smaller root, stable for a < 0
+  }
+  return std::min(start_[i] + tau, start_[i + 1]);
 }
 
 std::vector<double> CourseMotion::breakpoints(double t0, double t1) const {

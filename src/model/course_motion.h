@@ -1,5 +1,7 @@
 // The horizontal motion of a course (road_input.h's CourseRoad): each
-// segment's speed, and the lateral acceleration of its manoeuvre.
+// segment's speed, the lateral acceleration of its manoeuvre, and the
+// longitudinal one of a brake or an acceleration (the speed changing at that
+// rate from the segment's speed_kmh).
 #pragma once
 
 #include <vector>
@@ -22,10 +24,16 @@ class CourseMotion : public HorizontalMotion {
   bool accelerates() const override { return manoeuvres_; }
   // a_y of one manoeuvre at local time tau in [0, duration] (0 otherwise).
   static double lateral(const CourseSegment& s, double speed, double tau);
+  // Distance driven from t = 0 to t (the speed's integral; a rest and a sine
+  // do not move), and the first time the distance reaches s (0 for s <= 0;
+  // the course's end when it never does).
+  double distance(double t) const;
+  double timeAtDistance(double s) const;
 
  private:
   std::vector<CourseSegment> segments_;
   std::vector<double> start_, speed_;
+  std::vector<double> travelled_;  // distance at each segment's start, then at the end
   bool manoeuvres_ = false;
 };
 

@@ -20,6 +20,11 @@ struct Setup {
   double x[4], y[4], k[4], k3[4], unsprung_weight[4];
   double tyre;
   double body_load[3];  // g [m_s + M, M x_M, M y_M]
+  // Heights and bars (docs/models.md): k_a of each corner's axle, and
+  // g S = g (m_s h_b + M h_M), the elevated masses' moment per unit tilt.
+  double bar[4];
+  double tilt_moment;
+  bool elevated;  // bars or S: the general residuals (else today's, bit for bit)
 };
 
 Setup setupOf(const FullCarColumn& p) {
@@ -38,6 +43,9 @@ Setup setupOf(const FullCarColumn& p) {
   s.body_load[0] = (p[at.body_mass] + m) * g;
   s.body_load[1] = m * p.addedMassX() * g;
   s.body_load[2] = m * p.addedMassY() * g;
+  for (int c = 0; c < 4; ++c) s.bar[c] = p[at.anti_roll_bar[FullCarParameters::axle(c)]];
+  s.tilt_moment = g * (p[at.body_mass] * p[at.body_cg_height] + m * p[at.added_mass_height]);
+  s.elevated = s.tilt_moment != 0.0 || s.bar[0] != 0.0 || s.bar[2] != 0.0;
   return s;
 }
 
@@ -45,9 +53,61 @@ double compression(const Setup& s, const Vector7& x, int c) {
   return x[3 + c] - (x[0] + s.x[c] * x[1] + s.y[c] * x[2]);
 }
 
+// With heights or anti-roll bars (docs/models.md): each corner's load is its
+// spring's force plus its axle's bar, W_c = F_K(delta_c) + k_a (delta_c -
+// delta_partner) (the bar untwisted when both springs are equally
+// compressed), the body equations
+//   sum W = g (m_s + M),  sum W x = g (M x_M - S tan theta_s),
+//   sum W y = g (M y_M - S tan phi_s)
+// with tan theta_s = X[1] and tan phi_s = X[2] (the slopes of the corner
+// plane, as the small-angle corner heights take them), and each wheel
+// W_c + m_u g = -k_t zu_c (the bar acts on the unsprung masses oppositely).
+Vector7 elevatedResiduals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
+  Vector7 r;
+  for (int i = 0; i < 3; ++i) r[i] = -s.body_load[i];
+  r[1] += s.tilt_moment * x[1];
+  r[2] += s.tilt_moment * x[2];
+  if (j) {
+    j->setZero();
+    (*j)(1, 1) = s.tilt_moment;
+    (*j)(2, 2) = s.tilt_moment;
+  }
+  double d[4], slope[4];
+  for (int c = 0; c < 4; ++c) {
+    d[c] = compression(s, x, c);
+    const double k3 = cubic ? s.k3[c] : 0.0;
+    slope[c] = s.k[c] + 3.0 * k3 * d[c] * d[c];
+  }
+  for (int c = 0; c < 4; ++c) {
+    const int partner = c ^ 1;  // the other corner of the axle
+    const double k3 = cubic ? s.k3[c] : 0.0;
+    const double load = s.k[c] * d[c] + k3 * d[c] * d[c] * d[c] + s.bar[c] * (d[c] - d[partner]);
+    const double lever[3] = {1.0, s.x[c], s.y[c]};
+    for (int i = 0; i < 3; ++i) r[i] += load * lever[i];
+    r[3 + c] = load + s.unsprung_weight[c] + s.tyre * x[3 + c];
+    if (!j) continue;
+    // d delta_c / dX = [-1, -x_c, -y_c, e_c]; the load's derivative:
+    // (slope_c + k_a) d delta_c - k_a d delta_partner.
+    double dl[7] = {0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0};
+    const double own = slope[c] + s.bar[c];
+    dl[0] = -own + s.bar[c];
+    dl[1] = -own * s.x[c] + s.bar[c] * s.x[partner];
+    dl[2] = -own * s.y[c] + s.bar[c] * s.y[partner];
+    dl[3 + c] = own;
+    dl[3 + partner] = -s.bar[c];
+    for (int col = 0; col < 7; ++col) {
+      for (int i = 0; i < 3; ++i) (*j)(i, col) += dl[col] * lever[i];
+      (*j)(3 + c, col) += dl[col];
+    }
+    (*j)(3 + c, 3 + c) += s.tyre;
+  }
+  return r;
+}
+
 // Residuals R(X) (body force and moments, then the wheels) and, when j is
 // given, their Jacobian. cubic = false drops k3 (the linear start).
 Vector7 residuals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
+  if (s.elevated) return elevatedResiduals(s, x, cubic, j);
   Vector7 r;
   for (int i = 0; i < 3; ++i) r[i] = -s.body_load[i];
   if (j) j->setZero();
@@ -78,13 +138,22 @@ Vector7 residuals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
   throw std::runtime_error(os.str());
 }
 
+// The Newton step's linear solve: full pivoting as before without heights and
+// bars (bit for bit), partial pivoting with them (several times faster: the
+// road-free full car solves each collocation point's equilibria at every
+// re-linearisation; the Jacobian is a stiffness matrix, well conditioned).
+Vector7 linearSolve(const Setup& s, const Matrix7& j, const Vector7& r) {
+  if (s.elevated) return j.partialPivLu().solve(r);
+  return j.fullPivLu().solve(r);
+}
+
 FullCarEquilibrium solve(const FullCarColumn& p) {
   const Setup s = setupOf(p);
   Matrix7 j;
   // Linear springs: R is affine, so one solve from 0 is exact.
   const Vector7 zero = Vector7::Zero();
   const Vector7 r0 = residuals(s, zero, false, &j);
-  Vector7 x = -j.fullPivLu().solve(r0);
+  Vector7 x = -linearSolve(s, j, r0);
   if (!x.allFinite()) fail("non-finite linear-spring solution", 0);
   int it = 0;
   bool converged = false;
@@ -93,7 +162,7 @@ FullCarEquilibrium solve(const FullCarColumn& p) {
     if (it == kMaxIterations) fail("no convergence", it);
     const Vector7 r = residuals(s, x, true, &j);
     if (!r.allFinite()) fail("non-finite residual", it);
-    const Vector7 step = -j.fullPivLu().solve(r);
+    const Vector7 step = -linearSolve(s, j, r);
     if (!step.allFinite()) fail("non-finite Newton step", it);
     ++it;
     const double scale = std::max(x.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
@@ -131,6 +200,14 @@ FullCarEquilibrium solve(const FullCarColumn& p) {
     e.wheel_height[c] = x[3 + c];
     e.spring_compression[c] = d;
     e.load[c] = s.k[c] * d + s.k3[c] * d * d * d;
+  }
+  if (s.elevated) {
+    // The load the wheel carries: spring plus bar.
+    double spring[4];
+    for (int c = 0; c < 4; ++c) spring[c] = e.load[c];
+    for (int c = 0; c < 4; ++c) {
+      e.load[c] = spring[c] + s.bar[c] * (e.spring_compression[c] - e.spring_compression[c ^ 1]);
+    }
   }
   return e;
 }

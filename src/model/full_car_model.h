@@ -13,9 +13,13 @@
 //   [z, theta, phi, zu_fl, zu_fr, zu_rl, zu_rr, and their rates] (14)
 // Channels: u_fl u_fr u_rl u_rr (suspension extension z_i - zu_i) and their
 // rates v_fl .. v_rr, then the IMU's accel_y accel_z gyro_x gyro_y (REP 103
-// body axes; its pitch, nose down > 0, is -theta). The IMU channels and the
+// body axes; its pitch, nose down > 0, is -theta), then accel_x and the
+// drive's speed and gyro_z (the road's horizontal motion). Heights above the
+// mount plane, anti-roll bars and the horizontal accelerations a_x, a_y:
+// docs/models.md (all 0: the 7-DOF ride model; q is then that of O' below O,
+// corners at (x_i, y_i, 0) from it). The IMU channels and the
 // tare convention need the readings kept as states (ReadingSettings): then
-// 12 reading rows follow the 14 dynamic states, each corner's extension with
+// 15 reading rows follow the 14 dynamic states, each corner's extension with
 // the point's own geometry, and H selects them. Otherwise: The observation matrix is fixed, so it uses the nominal
 // geometry (a, b, w): for a point whose a, b or w differ from the nominal,
 // H y is not that point's own extension once the body pitches or rolls.
@@ -59,6 +63,14 @@ struct FullCarFields {
   T added_mass_x{};  // forward of the rear axle, m
   T added_mass_y{};  // left of the right wheels' line, m
   T imu_x{}, imu_y{};  // IMU mount relative to O, m
+  // Heights above the mount plane (the pitch and roll axes) and the anti-roll
+  // bars (docs/models.md): all 0 is the 7-DOF ride model of MODELS.md §2.
+  T body_cg_height{};     // h_b: O above O', the point of the mount plane below it
+  T added_mass_height{};  // h_M
+  T mount_height{};       // h_P, the mount plane above the ground
+  T wheel_radius{};       // r_w
+  T imu_height{};         // z_I
+  T anti_roll_bar[2]{};   // k_a, front and rear, N/m of travel difference
   // Settings: F_C = c * scale * tanh(rate * v), or F_C = c v.
   T damper_tanh_scale{};  // m/s
   T damper_tanh_rate{};   // s/m
@@ -173,24 +185,26 @@ class FullCarModel : public MechanicalModel {
   std::vector<double> breakpoints(double t0, double t1) const override;
 
   const std::vector<std::string>& stateNames() const override { return state_names_; }
-  int readingCount() const override { return readings_.as_states ? 12 : 0; }
+  int readingCount() const override { return readings_.as_states ? kChannels : 0; }
   bool channelModelled(int channel) const override {
     return readings_.as_states || channel < kSuspensionChannels;
   }
   ZeroConvention zero() const override { return readings_.zero; }
   static constexpr int kSuspensionChannels = 8;
+  // u_fl .. v_rr, accel_y accel_z gyro_x gyro_y, accel_x speed gyro_z.
+  static constexpr int kChannels = 15;
 
   const FullCarParameters& nominal() const { return nominal_; }
   const ContactRoad& road() const { return *road_; }
   const ContactRoad* contactRoad() const override { return road_.get(); }
 
- private:
   // The equilibrium at params (a Newton solve), memoised per thread: the
   // forecast asks invalidReason for each point and then prepares the same
-  // points on the same thread, so each point is solved once, not twice.
-  // Throws what solveFullCarEquilibrium throws.
+  // points on the same thread, so each point is solved once, not twice (the
+  // road-free model asks it too). Throws what solveFullCarEquilibrium throws.
   FullCarEquilibrium equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const;
 
+ private:
   std::unique_ptr<FullCarReadings> readingConstants(const Eigen::MatrixXd& params) const;
 
   FullCarParameters nominal_;  // the laws and the nominal geometry of H

@@ -51,4 +51,46 @@ std::vector<double> FullCarBumpRoad::breakpoints(double t0, double t1) const {
   return out;
 }
 
+FullCarCourseRoad::FullCarCourseRoad(const std::vector<CourseSegment>& segments, double wheelbase)
+    : course_(segments), motion_(segments, course_.boundaries()), wheelbase_(wheelbase) {
+  if (!(std::isfinite(wheelbase) && wheelbase >= 0.0)) {
+    throw std::invalid_argument("FullCarCourseRoad: wheelbase must be finite, >= 0");
+  }
+  const double end = course_.boundaries().back();
+  std::vector<double> front = course_.breakpoints(-1.0, end + 1.0);
+  front.push_back(0.0);  // the rear wheels reach the course's start
+  for (double b : front) {
+    const double s = motion_.distance(b) + wheelbase_;
+    if (s >= motion_.distance(end)) continue;  // the rear wheels never get there
+    rear_breakpoints_.push_back(motion_.timeAtDistance(s));
+  }
+  std::sort(rear_breakpoints_.begin(), rear_breakpoints_.end());
+}
+
+double FullCarCourseRoad::rearTime(double t) const {
+  const double s = motion_.distance(t) - wheelbase_;
+  if (s < 0.0) return -1.0;
+  return motion_.timeAtDistance(s);
+}
+
+void FullCarCourseRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) const {
+  const Eigen::Vector2d front = course_.height(t);
+  const double rear_t = rearTime(t);
+  const Eigen::Vector2d rear = rear_t < 0.0 ? Eigen::Vector2d::Zero() : course_.height(rear_t);
+  out[0] = front[0];
+  out[1] = front[1];
+  out[2] = rear[0];
+  out[3] = rear[1];
+}
+
+std::vector<double> FullCarCourseRoad::breakpoints(double t0, double t1) const {
+  std::vector<double> out = course_.breakpoints(t0, t1);
+  for (double b : rear_breakpoints_) {
+    if (b > t0 && b < t1) out.push_back(b);
+  }
+  std::sort(out.begin(), out.end());
+  out.erase(std::unique(out.begin(), out.end()), out.end());
+  return out;
+}
+
 }  // namespace pc_ekf

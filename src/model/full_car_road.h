@@ -4,8 +4,10 @@
 // oblique bump), the rear wheels one wheelbase behind the front ones.
 #pragma once
 
+#include <memory>
 #include <vector>
 
+#include "pc_ekf/model/course_motion.h"
 #include "pc_ekf/model/road_input.h"
 
 namespace pc_ekf {
@@ -31,6 +33,32 @@ class FullCarBumpRoad : public ContactRoad {
   double offset(int c) const;
   FullCarBumpSettings s_;
   double right_offset_;  // m of travel before the right wheels reach the bump
+};
+
+// A course (road.source course) under the full car's four wheels: the front
+// wheels on the course's left and right tracks, the rear ones a wheelbase
+// behind them by distance driven (the course's motion: a rest and a sine
+// segment do not move the vehicle, so the rear wheels stay where they are;
+// before the rear wheels reach the course's start the road under them is 0).
+// It carries the course's horizontal motion (turns, braking).
+class FullCarCourseRoad : public ContactRoad {
+ public:
+  // Throws what CourseRoad throws, or std::invalid_argument for a negative
+  // or non-finite wheelbase.
+  FullCarCourseRoad(const std::vector<CourseSegment>& segments, double wheelbase);
+  int contactCount() const override { return 4; }
+  void heights(double t, Eigen::Ref<Eigen::VectorXd> out) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+  const HorizontalMotion* horizontalMotion() const override { return &motion_; }
+  // The time at which the front wheels were where the rear ones are at t
+  // (negative: the rear wheels are not on the course yet).
+  double rearTime(double t) const;
+
+ private:
+  CourseRoad course_;
+  CourseMotion motion_;
+  double wheelbase_;
+  std::vector<double> rear_breakpoints_;  // the course's breakpoints as the rear wheels meet them
 };
 
 }  // namespace pc_ekf

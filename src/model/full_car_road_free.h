@@ -3,8 +3,12 @@
 // and rate; the IMU channels are the outputs.
 //
 // Inputs (ReadingInputs, in this order): u_fl u_fr u_rl u_rr v_fl v_fr v_rl
-// v_rr, then gyro_x gyro_y when the record has them. Outputs, kept as reading
-// states: accel_y, accel_z, gyro_x, gyro_y.
+// v_rr, then gyro_x gyro_y when the record has them, speed gyro_z (a_y =
+// speed x gyro_z) and accel_x (a_x = accel_x - (g + z'') theta + z_I theta''
+// + imu_x theta'^2) when it has them (without accel_x, a_x = 0). Outputs, kept
+// as reading states: accel_y, accel_z, gyro_x, gyro_y. Heights, bars and
+// a_x, a_y as in the model on a road (docs/models.md), with the total forces;
+// all 0 and none of the optional motion inputs: the equations below, bit for bit.
 //   F_i = F_K(delta_ref,i - u_i) - F_C(v_i)  (delta_ref: tare the empty vehicle's,
 //     rest the loaded one's static compression);
 //   M_b q'' = sum_i F_i [1, x_i, y_i] - [(m_s + M) g, M x_M g, M y_M g], q = (z, theta, phi);
@@ -41,7 +45,7 @@ class FullCarRoadFreeModel : public MechanicalModel {
   const std::vector<std::string>& stateNames() const override { return state_names_; }
   int readingCount() const override { return 4; }
   bool channelModelled(int channel) const override;
-  bool channelIsInput(int channel) const override { return channel < 8; }
+  bool channelIsInput(int channel) const override;
   ZeroConvention zero() const override { return zero_; }
   const Eigen::MatrixXd& observationMatrix() const override { return h_; }
   std::unique_ptr<ModelBatch> prepare(const Eigen::MatrixXd& params) const override;
@@ -66,6 +70,9 @@ class FullCarRoadFreeModel : public MechanicalModel {
   std::vector<std::string> state_names_;
   Eigen::MatrixXd h_;
   int spring_force_sum_ = -1;  // tare: ReadingInputs::sampleSum's handle
+  // The optional inputs' places (-1: not read).
+  int gyro_x_ = -1, gyro_y_ = -1, speed_ = -1, yaw_ = -1, accel_x_ = -1;
+  static constexpr int kAccelXChannel = 12, kSpeedChannel = 13, kYawChannel = 14;
 };
 
 }  // namespace pc_ekf

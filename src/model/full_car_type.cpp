@@ -29,7 +29,7 @@ class FullCarType : public ModelType {
     return std::make_shared<FullCarRoadFreeModel>(FullCarParameters::from(p), std::move(in), zero);
   }
   RoadFreeInputs roadFreeInputs() const override {
-    return {{"u_fl", "u_fr", "u_rl", "u_rr", "v_fl", "v_fr", "v_rl", "v_rr"}, {"gyro_x", "gyro_y"}};
+    return {{"u_fl", "u_fr", "u_rl", "u_rr", "v_fl", "v_fr", "v_rl", "v_rr"}, {"gyro_x", "gyro_y", "speed", "gyro_z", "accel_x"}};
   }
   // Front wheels on the tracks, rear wheels a wheelbase behind them.
   std::shared_ptr<const ContactRoad> drivenProfile(std::shared_ptr<const TrackProfile> profile,
@@ -46,6 +46,11 @@ class FullCarType : public ModelType {
     b.bump = s;
     b.wheelbase = FullCarParameters::from(p).wheelbase();
     return std::make_shared<FullCarBumpRoad>(b);
+  }
+  // Front wheels on the course's tracks, rear wheels a wheelbase behind.
+  std::shared_ptr<const ContactRoad> course(const std::vector<CourseSegment>& segments,
+                                            const ModelParameters& p) const override {
+    return std::make_shared<FullCarCourseRoad>(segments, FullCarParameters::from(p).wheelbase());
   }
   std::string equilibriumSummary(const ModelParameters& laws,
                                  const Eigen::VectorXd& values) const override {

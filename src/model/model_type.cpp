@@ -39,6 +39,13 @@ std::shared_ptr<const ContactRoad> ModelType::speedBump(const SpeedBumpSettings&
   }
 }
 
+std::shared_ptr<const ContactRoad> ModelType::course(const std::vector<CourseSegment>& segments,
+                                                    const ModelParameters&) const {
+  if (contactNames().size() == 2) return std::make_shared<CourseRoad>(segments);
+  throw std::invalid_argument(name() + ": no course road for " +
+                              std::to_string(contactNames().size()) + " contacts");
+}
+
 std::shared_ptr<const MechanicalModel> ModelType::build(const ModelParameters& parameters,
                                                         std::shared_ptr<const ContactRoad> road,
                                                         const ReadingSettings& readings) const {

@@ -41,6 +41,11 @@ class ModelType {
   // other counts throw std::invalid_argument (override it).
   virtual std::shared_ptr<const ContactRoad> speedBump(const SpeedBumpSettings& s,
                                                        const ModelParameters& parameters) const;
+  // The course road (road.source course) under this model's contacts.
+  // Default: two contacts take the course's tracks (CourseRoad); other
+  // counts throw std::invalid_argument (override it).
+  virtual std::shared_ptr<const ContactRoad> course(const std::vector<CourseSegment>& segments,
+                                                    const ModelParameters& parameters) const;
   // Road-free form (road.source: none): the model driven by the readings
   // `roadFreeInputs()` names (in that order; the optional ones when the
   // record has them). Default: none (std::invalid_argument).

@@ -28,13 +28,16 @@ void addCorners(const SpeedBumpSettings& s, double start, double t0, double t1,
 
 // An iso8608 course segment in its own time tau (CourseRoad): the profile
 // driven at `speed` (both tracks at distance speed * tau, as
-// DrivenProfileRoad's two contacts), blended from `from` over the lead-in.
+// DrivenProfileRoad's two contacts; under a brake or an acceleration
+// speed * tau + accel tau^2 / 2), blended from `from` over the lead-in.
 class CourseIso8608 : public RoadInput {
  public:
-  CourseIso8608(const Iso8608Settings& s, double speed, const Eigen::Vector2d& from)
-      : profile_(s), speed_(speed), lead_in_(s.lead_in), from_(from) {}
+  CourseIso8608(const Iso8608Settings& s, double speed, const Eigen::Vector2d& from,
+                double accel = 0.0)
+      : profile_(s), speed_(speed), accel_(accel), lead_in_(s.lead_in), from_(from) {}
   Eigen::Vector2d height(double tau) const override {
-    const double s = speed_ * tau;
+    double s = speed_ * tau;
+    if (accel_ != 0.0) s += 0.5 * accel_ * tau * tau;
     Eigen::Vector2d h(profile_.height(0, s), profile_.height(1, s));
     if (from_[0] != 0.0 || from_[1] != 0.0) h += (1.0 - iso8608LeadIn(s, lead_in_)) * from_;
     return h;
@@ -44,7 +47,7 @@ class CourseIso8608 : public RoadInput {
 
  private:
   Iso8608Profile profile_;
-  double speed_, lead_in_;
+  double speed_, accel_, lead_in_;
   Eigen::Vector2d from_;
 };
 
@@ -148,7 +151,8 @@ CourseRoad::CourseRoad(std::vector<CourseSegment> segments) {
       }
       try {
         roads_.push_back(
-            std::make_unique<CourseIso8608>(seg.iso8608, seg.speed_kmh / 3.6, level_.back()));
+            std::make_unique<CourseIso8608>(seg.iso8608, seg.speed_kmh / 3.6, level_.back(),
+                                            seg.longitudinalAcceleration()));
       } catch (const std::invalid_argument& e) {
         throw std::invalid_argument(who + ": " + e.what());
       }

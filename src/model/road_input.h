@@ -108,8 +108,13 @@ struct Iso8608Settings {
 // The road under it: flat (the level where the segment before left it) or,
 // rough, the ISO 8608 road of the segment's iso8608 settings (as an iso8608
 // segment).
+// Longitudinal manoeuvres (course segments brake, accelerate): the speed
+// falls (brake) or rises (accelerate) from speed_kmh at a constant rate,
+// `longitudinal` m/s^2 (> 0; the end speed must stay >= 0), on the same
+// surfaces; a_x = dV/dt.
 struct ManoeuvreSettings {
   double lateral_acceleration = 3.0;  // m/s^2: the turn's, the peak of the others
+  double longitudinal = 3.0;          // brake: deceleration, accelerate: acceleration, m/s^2
   double radius = 0.0;                // turn, m, left positive; 0: lateral_acceleration
   double ramp = 1.0;                  // turn, s
   double frequency = 0.5;             // slalom, Hz
@@ -118,7 +123,9 @@ struct ManoeuvreSettings {
 
 // One piece of a course road; durations in s.
 struct CourseSegment {
-  enum class Type { kSpeedBump, kSine, kRest, kIso8608, kTurn, kLaneChange, kSlalom };
+  enum class Type {
+    kSpeedBump, kSine, kRest, kIso8608, kTurn, kLaneChange, kSlalom, kBrake, kAccelerate
+  };
   Type type = Type::kRest;
   SpeedBumpSettings speed_bump;
   SineSettings sine;
@@ -127,7 +134,14 @@ struct CourseSegment {
   double speed_kmh = 36.0;  // iso8608 segment and manoeuvres: driving speed
   double duration = 0.0;  // all but a speed bump, which lasts until both tyres are past it
   bool isManoeuvre() const {
-    return type == Type::kTurn || type == Type::kLaneChange || type == Type::kSlalom;
+    return type == Type::kTurn || type == Type::kLaneChange || type == Type::kSlalom ||
+           isLongitudinal();
+  }
+  bool isLongitudinal() const { return type == Type::kBrake || type == Type::kAccelerate; }
+  // dV/dt over a longitudinal manoeuvre (0 for any other segment).
+  double longitudinalAcceleration() const {
+    return type == Type::kBrake ? -manoeuvre.longitudinal
+                                : type == Type::kAccelerate ? manoeuvre.longitudinal : 0.0;
   }
 };
 

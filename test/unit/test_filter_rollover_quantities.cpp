@@ -9,6 +9,7 @@
 #include <memory>
 
 #include "pc_ekf/filter/rollover_quantities.h"
+#include "pc_ekf/model/full_car_model.h"
 #include "pc_ekf/model/road_input.h"
 #include "pc_ekf/model/roll_plane_model.h"
 #include "pc_ekf/model/scalar_growth_model.h"
@@ -189,6 +190,59 @@ TEST(RolloverQuantities, AbsentWithoutHeights) {
   bad(0, 1) = std::nan("");
   EXPECT_TRUE(rolloverExpansions(heights, basis, bad).empty());
   EXPECT_FALSE(rolloverExpansions(heights, basis, heights.priorCoefficients(basis)).empty());
+}
+
+class FlatFourWheelRoad : public ContactRoad {
+ public:
+  int contactCount() const override { return 4; }
+  void heights(double, Eigen::Ref<Eigen::VectorXd> out) const override { out.setZero(); }
+  std::vector<double> breakpoints(double, double) const override { return {}; }
+};
+
+FullCarParameters elevatedFullCar() {
+  FullCarParameters p;
+  p.added_mass = 250.0;
+  p.body_cg_height = 0.20;
+  p.added_mass_height = 0.40;
+  p.mount_height = 0.40;
+  p.wheel_radius = 0.30;
+  p.anti_roll_bar[0] = 10000.0;
+  p.anti_roll_bar[1] = 6000.0;
+  return p;
+}
+
+// The rollover outputs of the full car: cg_height with the body mass, the
+// load and all four unsprung masses (two per axle), track = w.
+TEST(RolloverQuantities, FullCarValues) {
+  const FullCarParameters p = elevatedFullCar();
+  const FullCarModel model(p, std::make_shared<FlatFourWheelRoad>());
+  const UncertainParameter height{"added_mass_height", 0.5, 1.0, GermSpec{}};
+  const ParameterMapping mapping(model, {height});
+  ASSERT_TRUE(hasRolloverQuantities(mapping));
+  Eigen::MatrixXd full(p.toVector().size(), 2);
+  full.col(0) = p.toVector();
+  full.col(1) = p.toVector();
+  full(fullCarDescription().parameters().at("added_mass_height"), 1) = 1.0;
+  const Eigen::MatrixXd v = rolloverValues(mapping, full);
+  for (int q = 0; q < 2; ++q) {
+    const double h_m = q == 0 ? p.added_mass_height : 1.0;
+    const double mu = 2.0 * (p.unsprung_mass[0] + p.unsprung_mass[1]), m = p.body_mass,
+                 M = p.added_mass;
+    const double h = ((m + M) * p.mount_height + m * p.body_cg_height + M * h_m +
+                      mu * p.wheel_radius) /
+                     (m + M + mu);
+    EXPECT_NEAR(v(0, q), h, 1e-15);
+    EXPECT_NEAR(v(1, q), p.track_width / (2.0 * h), 1e-14);
+    EXPECT_NEAR(v(2, q), p.gravity * p.track_width / (2.0 * h), 1e-13);
+  }
+  EXPECT_GT(v(0, 1), v(0, 0));  // a higher load: a higher centre, a lower threshold
+  EXPECT_LT(v(2, 1), v(2, 0));
+  // Without heights (mount_height 0) there are none.
+  FullCarParameters flat;
+  const FullCarModel plain(flat, std::make_shared<FlatFourWheelRoad>());
+  EXPECT_FALSE(hasRolloverQuantities(ParameterMapping(plain, {UncertainParameter{
+                                                                 "added_mass", 200.0, 0.5,
+                                                                 GermSpec{}}})));
 }
 
 }  // namespace

@@ -27,7 +27,7 @@ const char* kDefaults =
     "  - {name: added_mass_position, relative_range: 0.25}\n";
 
 // Every branch that reads keys of its own: tolerances (number and map), a
-// course of each segment type (speed_bump, sine, rest, iso8608, turn,
+// course of each segment type (speed_bump, sine, rest, iso8608, turn, brake, accelerate,
 // lane_change, slalom), a truth
 // road, vehicle and schedule (xi and values).
 const char* kBranches =
@@ -47,6 +47,8 @@ const char* kBranches =
     "    - {type: turn, duration: 2.0, radius: -30.0, ramp: 0.5}\n"
     "    - {type: lane_change, duration: 2.0, lateral_acceleration: 4.0, surface: iso8608}\n"
     "    - {type: slalom, duration: 2.0, frequency: 0.5}\n"
+    "    - {type: brake, duration: 2.0, speed_kmh: 72.0, deceleration: 4.0, surface: iso8608}\n"
+    "    - {type: accelerate, duration: 2.0, speed_kmh: 20.0, acceleration: 2.0}\n"
     "vehicle:\n"
     "  motion_ratio_left: 0.8\n"
     "  motion_ratio_right: 0.8\n"
@@ -122,7 +124,8 @@ std::string tablePath(const std::string& read_path) {
       "road.course[i].type",  "road.course[i].duration", "road.course[i].speed_kmh",
       "road.course[i].class", "road.course[i].seed",     "road.course[i].correlation",
       "road.course[i].lateral_acceleration", "road.course[i].radius", "road.course[i].ramp",
-      "road.course[i].frequency", "road.course[i].surface"};
+      "road.course[i].frequency", "road.course[i].surface", "road.course[i].deceleration",
+      "road.course[i].acceleration"};
   if (after("road.course[i].") && !segment_rows.count(p)) {
     return "road.course[i].<speed_bump or sine key>";
   }

@@ -414,7 +414,7 @@ TEST(SyntheticTruthConfig, BadKeysAreRefusedByName) {
               "a list of 2 numbers");
   expectError(errorOf("", "road: {source: course}\n"), "road.course", "list of segments");
   expectError(errorOf("", "road: {source: course, course: [{type: gravel}]}\n"),
-              "road.course[0].type", "speed_bump, sine, rest, iso8608, turn, lane_change or slalom");
+              "road.course[0].type", "speed_bump, sine, rest, iso8608, turn, lane_change, slalom, brake or accelerate");
   expectError(errorOf("", "road: {source: course, course: [{type: speed_bump}, {type: rest}]}\n"),
               "road.course[1].duration", "positive");
   expectError(errorOf("", "road: {course: [{type: sine, duration: 1, phase: 2}]}\n"),

@@ -17,6 +17,8 @@
 namespace pc_ekf {
 namespace {
 
+const int kParameterCount = 28;  // fullCarParameterNames().size()
+
 constexpr double kSpeed = 16.0 / 3.6;
 
 FullCarParameters truth() {
@@ -64,17 +66,18 @@ Eigen::Matrix<double, 7, 1> residualsOf(const FullCarParameters& p, const FullCa
 TEST(FullCarParameters, VectorRoundTripAndNames) {
   const FullCarParameters p = truth();
   const Eigen::VectorXd v = p.toVector();
-  ASSERT_EQ(v.size(), 21);
-  ASSERT_EQ(fullCarParameterNames().size(), 21u);
+  ASSERT_EQ(v.size(), 28);  // 21, then the heights and bars (all 0 by default)
+  ASSERT_EQ(fullCarParameterNames().size(), 28u);
   EXPECT_EQ(fullCarParameterNames().front(), "body_mass");
-  EXPECT_EQ(fullCarParameterNames().back(), "imu_y");
+  EXPECT_EQ(fullCarParameterNames()[20], "imu_y");
+  EXPECT_EQ(fullCarParameterNames().back(), "anti_roll_bar_rear");
   EXPECT_EQ(FullCarParameters::fromVector(v, p).toVector(), v);
   const FullCarModel model(p, bumpRoad());
   EXPECT_EQ(model.parameterIndex("tyre_stiffness"), 14);
   EXPECT_DOUBLE_EQ(v[model.parameterIndex("added_mass_x")], 1.3 * (1.0 - 0.4 * 0.3875));
   EXPECT_EQ(model.stateSize(), 14);
-  EXPECT_EQ(model.channelNames().size(), 12u);  // 8 suspension, 4 IMU
-  EXPECT_EQ(model.observationMatrix().rows(), 12);
+  EXPECT_EQ(model.channelNames().size(), 15u);  // 8 suspension, 4 IMU, accel_x speed gyro_z
+  EXPECT_EQ(model.observationMatrix().rows(), 15);
   EXPECT_TRUE(model.channelModelled(7));
   EXPECT_FALSE(model.channelModelled(8));  // IMU channels need readings as states
   // H: u_fr = z + a theta - (w/2) phi - zu_fr; v_rl = zdot - b thetadot + (w/2) phidot - zudot_rl.
@@ -256,7 +259,7 @@ Eigen::MatrixXd offCentreColumns() {
   far.added_mass = 300.0;
   far.added_mass_x = 0.2;
   far.added_mass_y = 0.1;
-  Eigen::MatrixXd params(21, 3);
+  Eigen::MatrixXd params(kParameterCount, 3);
   params.col(0) = FullCarParameters().toVector();
   params.col(1) = truth().toVector();
   params.col(2) = far.toVector();
@@ -429,7 +432,7 @@ TEST(FullCarDynamics, CentredMassOnSymmetricBumpNeverRolls) {
   s.bump.height_left = s.bump.height_right = 0.1;
   s.bump.delay_fraction = 0.0;
   const FullCarModel model(FullCarParameters(), bumpRoad(s));
-  Eigen::MatrixXd params(21, 2);
+  Eigen::MatrixXd params(kParameterCount, 2);
   FullCarParameters p;
   p.added_mass_y = 0.75;  // on the centre line
   params.col(0) = p.toVector();
@@ -467,7 +470,7 @@ TEST(FullCarDynamics, MirroredMassMirrorsTheResponse) {
   s.bump.delay_fraction = 0.0;
   s.bump.height_left = s.bump.height_right = 0.08;
   const FullCarModel model(FullCarParameters(), bumpRoad(s));
-  Eigen::MatrixXd params(21, 2);
+  Eigen::MatrixXd params(kParameterCount, 2);
   FullCarParameters p = truth();
   params.col(0) = p.toVector();
   p.added_mass_y = p.track_width - p.added_mass_y;
@@ -498,7 +501,7 @@ class PlainOnly : public ModelBatch {
 };
 
 Eigen::MatrixXd spreadColumns(int count, DamperLaw law) {
-  Eigen::MatrixXd params(21, count);
+  Eigen::MatrixXd params(kParameterCount, count);
   for (int q = 0; q < count; ++q) {
     FullCarParameters p = truth();
     const double s = static_cast<double>(q) / count;  // 0 .. 1
@@ -635,7 +638,7 @@ TEST(FullCarModel, InvalidReasonForEachDomainRule) {
   const auto& names = model.parameterNames();
   EXPECT_EQ(model.invalidReason(nominal), "");
   EXPECT_EQ(model.invalidReason(truth().toVector()), "");
-  EXPECT_NE(model.invalidReason(nominal.head(20)).find("expected 21"), std::string::npos);
+  EXPECT_NE(model.invalidReason(nominal.head(27)).find("expected 28"), std::string::npos);
   const auto reason = [&](int i, double value) {
     Eigen::VectorXd v = nominal;
     v[i] = value;
@@ -644,7 +647,7 @@ TEST(FullCarModel, InvalidReasonForEachDomainRule) {
   const auto expectContains = [](const std::string& text, const std::string& part) {
     EXPECT_NE(text.find(part), std::string::npos) << "'" << text << "' lacks '" << part << "'";
   };
-  for (int i = 0; i < 21; ++i) {
+  for (int i = 0; i < kParameterCount; ++i) {
     expectContains(reason(i, std::numeric_limits<double>::quiet_NaN()), names[i] + " = nan");
     expectContains(reason(i, std::numeric_limits<double>::infinity()), "is not finite");
   }
@@ -679,7 +682,7 @@ TEST(FullCarModel, InvalidReasonForEachDomainRule) {
   // Finite but overflowing: the equilibrium cannot be solved.
   expectContains(reason(0, 1e308), "static equilibrium");
   // prepare() refuses inadmissible columns.
-  Eigen::MatrixXd params(21, 2);
+  Eigen::MatrixXd params(kParameterCount, 2);
   params.col(0) = nominal;
   params.col(1) = nominal;
   params(17, 1) = 3.0;

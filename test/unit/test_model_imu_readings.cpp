@@ -167,7 +167,7 @@ std::shared_ptr<const ContactRoad> carBump(const FullCarParameters& p) {
 TEST(FullCarReadings, TareAtRestAgainstTheEquilibrium) {
   const FullCarParameters p = loadedCar();
   const FullCarModel m(p, carBump(p), {ZeroConvention::kTare, true});
-  EXPECT_EQ(m.stateSize(), 26);
+  EXPECT_EQ(m.stateSize(), 29);  // 14 dynamic, 15 readings
   Eigen::MatrixXd params = p.toVector();
   const Eigen::ArrayXXd y = m.prepare(params)->initialState();
   FullCarParameters empty = p;
@@ -186,6 +186,8 @@ TEST(FullCarReadings, TareAtRestAgainstTheEquilibrium) {
   const FullCarModel rest(p, carBump(p), {ZeroConvention::kRest, true});
   const Eigen::ArrayXXd r = rest.prepare(params)->initialState();
   for (int row = kUfl; row <= kCarGyroY; ++row) EXPECT_NEAR(r(row, 0), 0.0, 1e-15) << row;
+  EXPECT_NEAR(r(kCarGyroY + 1, 0), 0.0, 1e-15);  // accel_x, less its rest value g theta_s
+  EXPECT_NEAR(y(kCarGyroY + 1, 0), g * e.pitch, 1e-15);  // raw: the load's pitch
 }
 
 TEST(FullCarReadings, DrivingMatchesFiniteDifferencesOfTheMotion) {
