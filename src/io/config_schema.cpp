@@ -142,7 +142,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"filter.horizon.accel_bias", "number", "0", "[0, 10]", "m/s^2: prior std of constant biases of accel_y and accel_z, estimated as two more states (0: not estimated); reported as nuisance.accel_y_bias, accel_z_bias"},
       {"filter.horizon.gyro_bias", "number", "0", "[0, 1]", "rad/s: prior std of a constant gyro_x bias, estimated as one more state whose drift (bias x time) the model's roll takes off (0: not estimated); reported as nuisance.gyro_x_bias"},
       {"truth.cross_fall.start", "number", "0", "[-0.5, 0.5]", "rad, left side up > 0 (synthetic drives): the road's cross-fall under the truth from t = 0 (0.02: 2 %); the vehicle tilted rigidly with it, its gravity share g sin(beta) a lateral specific force on the truth model"},
-      {"truth.cross_fall.end", "number", "start", "[-0.5, 0.5]", "rad: the cross-fall after the change (a crown from +2 % to -2 %: start 0.02, end -0.02); the gyro_x reading turns with it"},
+      {"truth.cross_fall.end", "number", "0 (start when absent)", "[-0.5, 0.5]", "rad: the cross-fall after the change (a crown from +2 % to -2 %: start 0.02, end -0.02); the gyro_x reading turns with it"},
       {"truth.cross_fall.at", "number", "0", "[0, inf)", "s: the change begins (at speed V: V at metres into the drive)"},
       {"truth.cross_fall.over", "number", "0", "[0, inf)", "s: the change's length, a half-cosine (0: a step)"},
       {"filter.horizon.step", "number", "1e-04", "(0, 0.1]", "finite-difference step of the Jacobian, in prior std"},
