@@ -308,14 +308,6 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   w.number("gyro_bias", s.horizon.gyro_bias, 0.0, 1.0);
   w.finish();
   s.horizon.window = linearization == "mean" ? window : 0.0;
-  if (s.horizon.nuisance() && linearization != "mean") {
-    w.fail(s.horizon.cross_fall > 0.0        ? "cross_fall"
-           : s.horizon.cross_fall_walk > 0.0 ? "cross_fall_walk"
-           : s.horizon.accel_bias > 0.0      ? "accel_bias"
-                                             : "gyro_bias",
-           "a nuisance value with filter.linearization " + linearization,
-           "filter.linearization: mean (the road-free roll plane with its IMU)");
-  }
   if (s.reopen.mode == ReopenMode::kLoad && linearization != "mean") {
     r.fail("mode", "'load'", "filter.linearization: mean (or off, width, prior)");
   }
