@@ -9,6 +9,11 @@
 
 namespace pc_ekf {
 
+namespace {
+// g for the cross-fall's lateral share g sin(beta) (the models' default gravity).
+constexpr double kCrossFallGravity = 9.81;
+}  // namespace
+
 bool MovingHorizon::carriesRollAngle(const std::vector<std::string>& channels) {
   const auto has = [&](const char* name) {
     return std::find(channels.begin(), channels.end(), name) != channels.end();
@@ -62,6 +67,11 @@ MovingHorizon::MovingHorizon(const PcPropagator& propagator, const MovingHorizon
   for (int d : degree_one_) {
     if (d < 0) throw std::invalid_argument("filter.linearization: mean needs pc.order >= 1");
   }
+  if (settings_.nuisance() && !angle_) {
+    throw std::invalid_argument(
+        "filter.horizon.cross_fall, cross_fall_walk, accel_bias and gyro_bias need the roll "
+        "plane's IMU channels (accel_y, accel_z, gyro_x) read without a road");
+  }
   if (settings_.clock_offset > 0.0 && !angle_) {
     throw std::invalid_argument(
         "filter.horizon.clock_offset needs the roll plane's IMU channels (accel_y, accel_z, "
@@ -95,10 +105,22 @@ double MovingHorizon::clockOffsetStd() const {
 
 void MovingHorizon::reset() {
   offset_ = settings_.clock_offset > 0.0 ? parameters_ + 1 : -1;  // after the angle
-  const int n = parameters_ + (angle_ ? 1 : 0) + (offset_ >= 0 ? 1 : 0);
+  int n = parameters_ + (angle_ ? 1 : 0) + (offset_ >= 0 ? 1 : 0);
+  // The nuisance values after them.
+  cross_ = bias_y_ = bias_z_ = bias_g_ = -1;
+  if (angle_ && (settings_.cross_fall > 0.0 || settings_.cross_fall_walk > 0.0)) cross_ = n++;
+  if (angle_ && settings_.accel_bias > 0.0) {
+    bias_y_ = n++;
+    bias_z_ = n++;
+  }
+  if (angle_ && settings_.gyro_bias > 0.0) bias_g_ = n++;
   mean_ = Eigen::VectorXd::Zero(n);
   cov_ = Eigen::MatrixXd::Identity(n, n);
   if (angle_) cov_(last(), last()) = 0.0;  // at rest at t = 0: no angle integrated yet
+  if (cross_ >= 0) cov_(cross_, cross_) = settings_.cross_fall * settings_.cross_fall;
+  const double accel = settings_.accel_bias * settings_.accel_bias;
+  if (bias_y_ >= 0) cov_(bias_y_, bias_y_) = cov_(bias_z_, bias_z_) = accel;
+  if (bias_g_ >= 0) cov_(bias_g_, bias_g_) = settings_.gyro_bias * settings_.gyro_bias;
   previous_time_ = 0.0;
   recent_.clear();
   anchor_rows_.clear();
@@ -111,6 +133,16 @@ void MovingHorizon::walk(Eigen::MatrixXd& cov, double dt) const {
   // per reading, each reading in two increments: (sigma dt)^2 a sample.
   const double sigma = noise_->channel_std.size() > gyro_ ? noise_->channel_std[gyro_] : 0.0;
   cov(last(), last()) += sigma * sigma * dt * dt;
+  if (cross_ >= 0 && settings_.cross_fall_walk > 0.0) {
+    // The crown's change: the gyro turns with it, so the model's roll (the
+    // gyro's integral) moves off the body's roll on the axle by the same
+    // increment (the angle's error and the cross-fall walk together).
+    const double q = settings_.cross_fall_walk * settings_.cross_fall_walk * dt;
+    cov(last(), last()) += q;
+    cov(cross_, cross_) += q;
+    cov(last(), cross_) += q;
+    cov(cross_, last()) += q;
+  }
 }
 
 void MovingHorizon::startWindow() {
@@ -121,11 +153,14 @@ void MovingHorizon::startWindow() {
 }
 
 bool MovingHorizon::readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
-                               double shift) {
+                               double shift, const Eigen::VectorXd& roll,
+                               const Eigen::VectorXd& lateral) {
   const MechanicalModel& model = propagator_.model();
   y = Eigen::ArrayXXd::Zero(model.stateSize(), th.cols());
-  if (!anchor_rows_.empty()) return anchoredReadings(th, time, y, shift);
-  model.prepare(propagator_.mapping().fullParameters(th))->readingsShifted(time, shift, y);
+  if (!anchor_rows_.empty()) return anchoredReadings(th, time, y, shift, roll, lateral);
+  auto batch = model.prepare(propagator_.mapping().fullParameters(th));
+  if (roll.size() > 0 && !batch->offsetPoints(roll, lateral)) return false;
+  batch->readingsShifted(time, shift, y);
   evaluations_ += th.cols();
   return true;
 }
@@ -157,9 +192,31 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
   // With a clock offset the IMU stamped m.time read what the inputs drove
   // at m.time - offset.
   const double shift = offset_ >= 0 ? shiftedOffset(at[offset_]) : 0.0;
+  // Nuisance values: the model's roll is the gyro's integral less the
+  // angle's error (the crown's change and the gyro's noise) and the gyro
+  // bias's drift, so the body's moments see the true tilt too; the road's
+  // cross-fall beta adds g sin(beta) to a_y. Two more columns at the mean:
+  // one step in the roll, one in beta (the slopes).
+  const bool nuisance = settings_.nuisance();
+  constexpr double kRollStep = 1e-4;  // rad
+  Eigen::VectorXd rolls, laterals;
+  Eigen::MatrixXd thx = th;
+  double roll = 0.0, lateral = 0.0;
+  if (nuisance) {
+    roll = -(at[n] + (bias_g_ >= 0 ? at[bias_g_] * m.time : 0.0));
+    lateral = cross_ >= 0 ? kCrossFallGravity * std::sin(at[cross_]) : 0.0;
+    const int extra = cross_ >= 0 ? 2 : 1;
+    thx.resize(th.rows(), n + 1 + extra);
+    thx.leftCols(n + 1) = th;
+    for (int e = 0; e < extra; ++e) thx.col(n + 1 + e) = th.col(0);
+    rolls = Eigen::VectorXd::Constant(n + 1 + extra, roll);
+    laterals = Eigen::VectorXd::Constant(n + 1 + extra, lateral);
+    rolls[n + 1] = roll - kRollStep;
+    if (cross_ >= 0) laterals[n + 2] = kCrossFallGravity * std::sin(at[cross_] + kRollStep);
+  }
   Eigen::ArrayXXd y;
-  if (!readingsAt(th, m.time, y, shift)) return false;
-  Eigen::MatrixXd z(c, n + 1);
+  if (!readingsAt(thx, m.time, y, shift, rolls, laterals)) return false;
+  Eigen::MatrixXd z(c, y.cols());
   for (int r = 0; r < c; ++r) {
     z.row(r) = model.observationMatrix().row(m.channels[static_cast<std::size_t>(r)]) * y.matrix();
   }
@@ -167,7 +224,25 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
   jacobian->setZero(c, static_cast<Eigen::Index>(at.size()));
   for (int i = 0; i < n; ++i) jacobian->col(i) = (z.col(i + 1) - z.col(0)) / steps[i];
   *z0 = z.col(0);
-  if (angle_) {
+  if (nuisance) {
+    // The slope in the angle's error: a forward difference of the model's
+    // roll (the error is minus the roll offset); the gyro bias's is it times
+    // the time since the start. The biases add to their channels.
+    for (int r = 0; r < c; ++r) {
+      const int ch = m.channels[static_cast<std::size_t>(r)];
+      (*jacobian)(r, n) = (z(r, n + 1) - z(r, 0)) / kRollStep;
+      if (cross_ >= 0) (*jacobian)(r, cross_) = (z(r, n + 2) - z(r, 0)) / kRollStep;
+      if (bias_g_ >= 0) (*jacobian)(r, bias_g_) = (*jacobian)(r, n) * m.time;
+      if (bias_y_ >= 0 && ch == accel_y_) {
+        (*jacobian)(r, bias_y_) = 1.0;
+        (*z0)[r] += at[bias_y_];
+      }
+      if (bias_z_ >= 0 && ch == accel_z_) {
+        (*jacobian)(r, bias_z_) = 1.0;
+        (*z0)[r] += at[bias_z_];
+      }
+    }
+  } else if (angle_) {
     // The angle the model used is the true one plus e: a reading's slope in
     // e is minus its slope in the angle, (g + a) (cos, -sin) of it, read off
     // the predicted accel_z and accel_y (rest: their zero added back).
@@ -195,8 +270,10 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
     const double h = differenceStep(dt);
     if (h > 0.0) {
       Eigen::ArrayXXd later, earlier;
-      if (!readingsAt(th.col(0), m.time, later, shift + h)) return false;
-      if (!readingsAt(th.col(0), m.time, earlier, shift - h)) return false;
+      const Eigen::VectorXd r1 = Eigen::VectorXd::Constant(nuisance ? 1 : 0, roll);
+      const Eigen::VectorXd l1 = Eigen::VectorXd::Constant(nuisance ? 1 : 0, lateral);
+      if (!readingsAt(th.col(0), m.time, later, shift + h, r1, l1)) return false;
+      if (!readingsAt(th.col(0), m.time, earlier, shift - h, r1, l1)) return false;
       const Eigen::VectorXd slope =
           (later.matrix().col(0) - earlier.matrix().col(0)) * (settings_.clock_offset / (2.0 * h));
       for (int r = 0; r < c; ++r) {
@@ -451,7 +528,8 @@ Eigen::ArrayXd MovingHorizon::tilts(const Eigen::ArrayXXd& y) const {
 }
 
 bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
-                                     double shift) {
+                                     double shift, const Eigen::VectorXd& roll,
+                                     const Eigen::VectorXd& lateral) {
   // Each column twice: as it is and with the load at the anchor. The second
   // gives the tilt the body has at the anchor (the gyro's integral is the
   // same in both); accel_y and accel_z are turned to it (tare: no offsets).
@@ -466,7 +544,14 @@ bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eig
     if (!model.invalidReason(full.col(c)).empty()) return false;
   }
   Eigen::ArrayXXd all = Eigen::ArrayXXd::Zero(model.stateSize(), 2 * cols);
-  model.prepare(full)->readingsShifted(time, shift, all);
+  auto batch = model.prepare(full);
+  if (roll.size() > 0) {  // both halves
+    Eigen::VectorXd r2(2 * cols), l2(2 * cols);
+    r2 << roll, roll;
+    l2 << lateral, lateral;
+    if (!batch->offsetPoints(r2, l2)) return false;
+  }
+  batch->readingsShifted(time, shift, all);
   evaluations_ += 2 * cols;
   const Eigen::ArrayXd tilt = tilts(all);
   y = all.leftCols(cols);

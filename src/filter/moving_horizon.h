@@ -105,6 +105,19 @@ class MovingHorizon {
   // not estimated (settings.clock_offset 0).
   double clockOffset() const;
   double clockOffsetStd() const;
+  // Nuisance values (settings.cross_fall, accel_bias, gyro_bias > 0; NaN:
+  // not estimated): the road's cross-fall under the vehicle now (rad, left
+  // side up > 0), the accel_y and accel_z biases (m/s^2) and the gyro_x
+  // bias (rad/s); mean and std.
+  double crossFall() const { return stateOr(cross_, 1.0, false); }
+  double crossFallStd() const { return stateOr(cross_, 1.0, true); }
+  double accelYBias() const { return stateOr(bias_y_, 1.0, false); }
+  double accelYBiasStd() const { return stateOr(bias_y_, 1.0, true); }
+  double accelZBias() const { return stateOr(bias_z_, 1.0, false); }
+  double accelZBiasStd() const { return stateOr(bias_z_, 1.0, true); }
+  double gyroBias() const { return stateOr(bias_g_, 1.0, false); }
+  double gyroBiasStd() const { return stateOr(bias_g_, 1.0, true); }
+  bool nuisance() const { return settings_.nuisance(); }
   // With a clock offset, a sample is processed once the inputs after it,
   // up to 3 prior std of the offset and a difference step beyond, are in:
   // process() those at least this much older than the latest input. 0:
@@ -141,7 +154,11 @@ class MovingHorizon {
                Eigen::MatrixXd* jacobian, Eigen::VectorXd* variances);
   // Readings (model state rows) of parameter columns th at `time`, the
   // inputs `shift` earlier (ModelBatch::readingsShifted).
-  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y, double shift = 0.0);
+  // roll, lateral: per column, the roll offset and lateral specific force
+  // the model takes (ModelBatch::offsetPoints); empty: none.
+  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y, double shift = 0.0,
+                  const Eigen::VectorXd& roll = Eigen::VectorXd(),
+                  const Eigen::VectorXd& lateral = Eigen::VectorXd());
   void endWindow(HorizonStep& s);
   // reopen() with the roll angle carried: the angle's error moved to the
   // new load's static tilt (false: not possible, nothing changed).
@@ -151,7 +168,7 @@ class MovingHorizon {
   // Readings of parameter columns th (theta) with the angle at the anchor's
   // tilt (after a load change); false: not admissible or not finite.
   bool anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
-                        double shift);
+                        double shift, const Eigen::VectorXd& roll, const Eigen::VectorXd& lateral);
   std::vector<int> anchor_rows_;  // the load's rows, once a load change came
   Eigen::VectorXd anchor_;        // theta: the load at the start (its mean then)
   void startWindow();
@@ -168,6 +185,15 @@ class MovingHorizon {
   double last_gap_ = 0.0;  // the last sample's time since the one before
   int last() const { return parameters_; }  // the angle's row
   int offset_ = -1;  // the clock offset's row (units of settings_.clock_offset); -1: none
+  // Nuisance rows (physical units; -1: none): the road's cross-fall beta
+  // (rad), accel_y's and accel_z's bias (m/s^2), gyro_x's (rad/s). With
+  // settings_.nuisance() the angle's error (and the gyro bias's drift) enter
+  // the model's roll, the cross-fall its lateral specific force g sin(beta).
+  int cross_ = -1, bias_y_ = -1, bias_z_ = -1, bias_g_ = -1;
+  double stateOr(int row, double scale, bool stddev) const {
+    if (row < 0) return std::numeric_limits<double>::quiet_NaN();
+    return stddev ? scale * std::sqrt(std::max(0.0, cov_(row, row))) : scale * mean_[row];
+  }
   // The offset (s) a state value stands for, held within 3 prior std (the
   // inputs after the shifted instant are in: readingLag).
   double shiftedOffset(double state) const;

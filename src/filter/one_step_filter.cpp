@@ -459,6 +459,16 @@ StepResult OneStepFilter::step(const Measurement& m) {
   if (horizon_) {
     r.clock_offset = horizon_->clockOffset();
     r.clock_offset_std = horizon_->clockOffsetStd();
+    if (horizon_->nuisance()) {
+      const MovingHorizon& h = *horizon_;
+      const NuisanceValue all[] = {{"cross_fall_rad", h.crossFall(), h.crossFallStd()},
+                                   {"accel_y_bias", h.accelYBias(), h.accelYBiasStd()},
+                                   {"accel_z_bias", h.accelZBias(), h.accelZBiasStd()},
+                                   {"gyro_x_bias", h.gyroBias(), h.gyroBiasStd()}};
+      for (const NuisanceValue& v : all) {
+        if (std::isfinite(v.mean)) r.nuisance.push_back(v);
+      }
+    }
   }
   const int support = r.health.mass_outside_support.size() > 0 ? r.health.support_exceeded : -1;
   // The rule's chance re-opens at this sample's dof: a correct model at a

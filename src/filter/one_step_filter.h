@@ -48,6 +48,7 @@ struct StepResult {
   // linearization mean with filter.horizon.clock_offset: the offset (s), its std; NaN: none.
   double clock_offset = std::numeric_limits<double>::quiet_NaN();
   double clock_offset_std = std::numeric_limits<double>::quiet_NaN();
+  std::vector<NuisanceValue> nuisance;  // filter.horizon's nuisance values; empty: none
   int rejected = 0;       // samples gated or rolled back since the prior
   bool relinearized = false;  // the samples so far were re-run from a working prior
   int restarts = 0;           // re-linearisations since the prior

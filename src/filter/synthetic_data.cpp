@@ -114,6 +114,12 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
     for (double& t : earlier) t = std::max(0.0, t - s.timing.imu_clock_offset);
     imu = simulateScheduled(model, truth_params, s.schedule, earlier, s.integration);
   }
+  int gyro_x = -1;  // the crown's rate goes to it (a cross-fall that changes)
+  if (s.cross_fall.active() && s.cross_fall.start != s.cross_fall.end) {
+    const auto& names = model.channelNames();
+    const auto it = std::find(names.begin(), names.end(), "gyro_x");
+    if (it != names.end()) gyro_x = static_cast<int>(it - names.begin());
+  }
   std::mt19937_64 rng(s.seed);
   std::normal_distribution<double> normal;
   // Sized once: a long drive's series grown by doubling held up to twice itself.
@@ -134,7 +140,8 @@ MeasurementSeries synthesizeMeasurements(const MechanicalModel& model,
     Measurement exact = m;
     for (std::size_t c = 0; c < s.channels.size(); ++c) {
       const int ch = s.channels[c];
-      const double z = is_imu[static_cast<std::size_t>(ch)] ? imu[k](ch, 0) : channels[k](ch, 0);
+      double z = is_imu[static_cast<std::size_t>(ch)] ? imu[k](ch, 0) : channels[k](ch, 0);
+      if (ch == gyro_x) z += s.cross_fall.rate(timing.instants[k]);
       const double floor = channelValue(s.sensor.noise_floor, ch, s.noise_floor);
       const double relative = channelValue(s.channel_noise_relative, ch, s.noise_relative);
       const double sd = std::hypot(relative * z, floor);

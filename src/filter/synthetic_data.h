@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/model/horizontal_motion.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/mechanical_model.h"
 
@@ -62,6 +63,10 @@ struct SyntheticDataSettings {
   SensorImperfections sensor;
   TimingImperfections timing;
   std::vector<ParameterChange> schedule;  // times increasing
+  // The road's cross-fall the truth drives on (its lateral share is the
+  // truth model's: CrossFallMotion); here its rate d beta / dt is added to a
+  // gyro_x channel: the whole vehicle turns with the road's crown.
+  CrossFall cross_fall;
 };
 
 // `truth_params`: the model's full parameter vector until the first change.

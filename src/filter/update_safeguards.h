@@ -75,6 +75,24 @@ struct MovingHorizonSettings {
   // s: prior std of a constant offset between the stamps of the predicted
   // channels (the IMU) and of the inputs (the suspension); 0 = not estimated.
   double clock_offset = 0.0;
+  // Nuisance values (road-free roll plane with its IMU; 0 = not estimated),
+  // prior stds of: the road's cross-fall at the start (rad: the whole
+  // vehicle's tilt the travels do not see), its random walk (rad/sqrt(s)),
+  // constant biases of accel_y and accel_z (m/s^2) and of gyro_x (rad/s).
+  double cross_fall = 0.0;
+  double cross_fall_walk = 0.0;
+  double accel_bias = 0.0;
+  double gyro_bias = 0.0;
+  bool nuisance() const {
+    return cross_fall > 0.0 || cross_fall_walk > 0.0 || accel_bias > 0.0 || gyro_bias > 0.0;
+  }
+};
+
+// One estimated nuisance value (MovingHorizonSettings): its name in the
+// estimate (cross_fall_rad, accel_y_bias, accel_z_bias, gyro_x_bias), mean and std.
+struct NuisanceValue {
+  std::string name;
+  double mean = 0.0, stddev = 0.0;
 };
 
 struct SafeguardSettings {

@@ -25,7 +25,17 @@ std::shared_ptr<const ContactRoad> makeRoad(const EstimatorConfig& c,
   return roadOf(c, c.road);
 }
 
+std::shared_ptr<const ContactRoad> makeTruthRoadLevel(const EstimatorConfig& c);
+
 std::shared_ptr<const ContactRoad> makeTruthRoad(const EstimatorConfig& c) {
+  std::shared_ptr<const ContactRoad> road = makeTruthRoadLevel(c);
+  if (!c.truth.cross_fall.active()) return road;
+  // The cross-fall: gravity's share along the tilted vehicle's y axis.
+  return std::make_shared<RoadWithMotion>(
+      road, std::make_shared<CrossFallMotion>(road, c.truth.cross_fall, 9.81));
+}
+
+std::shared_ptr<const ContactRoad> makeTruthRoadLevel(const EstimatorConfig& c) {
   if (c.truth.road) return roadOf(c, *c.truth.road);
   if (c.road.source == RoadSource::kNone) {
     throw ConfigError(c.source + ": key 'truth.road': road.source is none, so a synthetic drive " +
@@ -303,6 +313,7 @@ SyntheticDataSettings syntheticSettings(const EstimatorConfig& c, const Mechanic
   s.integration = c.integration;
   s.sensor = c.truth.sensor;
   s.timing = c.truth.timing;
+  s.cross_fall = c.truth.cross_fall;
   for (const auto& ch : c.truth.schedule) {
     s.schedule.push_back({ch.time, fullAt(c, truth, ch.xi), c.truth.settle_changes});
   }

@@ -313,6 +313,10 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   w.integer("reruns", s.horizon.reruns, 0, 100);
   w.number("step", s.horizon.step, 0.0, 0.1, true);
   w.number("clock_offset", s.horizon.clock_offset, 0.0, 1.0);
+  w.number("cross_fall", s.horizon.cross_fall, 0.0, 0.5);
+  w.number("cross_fall_walk", s.horizon.cross_fall_walk, 0.0, 1.0);
+  w.number("accel_bias", s.horizon.accel_bias, 0.0, 10.0);
+  w.number("gyro_bias", s.horizon.gyro_bias, 0.0, 1.0);
   w.finish();
   s.horizon.window = linearization == "mean" ? window : 0.0;
   if (s.reopen.mode == ReopenMode::kLoad && linearization != "mean") {
@@ -629,6 +633,14 @@ void readTruth(YamlMapReader t, EstimatorConfig& c) {
   g.unsignedInteger("seed", c.truth.timing.seed);
   g.number("imu_clock_offset", c.truth.timing.imu_clock_offset, -1.0, 1.0);
   g.finish();
+
+  YamlMapReader x = t.map("cross_fall");
+  x.number("start", c.truth.cross_fall.start, -0.5, 0.5);
+  c.truth.cross_fall.end = c.truth.cross_fall.start;  // unless given: constant
+  x.number("end", c.truth.cross_fall.end, -0.5, 0.5);
+  x.number("at", c.truth.cross_fall.at, 0.0, kInf);
+  x.number("over", c.truth.cross_fall.over, 0.0, kInf);
+  x.finish();
 
   std::string load_change = "jump";
   t.text("load_change", load_change);

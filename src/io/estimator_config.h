@@ -101,6 +101,8 @@ struct TruthConfig {
   // The road the truth drives on (truth.road; unset: the config's road). A
   // road-free config (road.source: none) needs it for synthetic drives.
   std::shared_ptr<const RoadConfig> road;
+  // truth.cross_fall: the road's cross-fall under the truth (0: level).
+  CrossFall cross_fall;
 };
 
 struct CollocationConfig {

@@ -94,6 +94,7 @@ void OneStepRun::finish(std::size_t samples, const std::optional<StepResult>& de
   r->load_tracking = c_.safeguards.reopen.mode == ReopenMode::kLoad;
   r->clock_offset = last_.clock_offset;
   r->clock_offset_std = last_.clock_offset_std;
+  r->nuisance = last_.nuisance;
   r->last_record = recordOf(last_);
   r->band_nested_fraction = samples == 0 ? 1.0 : double(nested_) / samples;
   summarise(c_, last_.mean, last_.stddev, r);

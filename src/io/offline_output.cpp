@@ -154,6 +154,11 @@ std::string toJson(const OfflineResult& r) {
   if (std::isfinite(r.clock_offset)) {
     j["clock_offset"] = {{"mean_s", r.clock_offset}, {"stddev_s", r.clock_offset_std}};
   }
+  if (!r.nuisance.empty()) {
+    Json values = Json::object();
+    for (const NuisanceValue& v : r.nuisance) values[v.name] = {{"mean", v.mean}, {"stddev", v.stddev}};
+    j["nuisance"] = values;
+  }
   if (r.method == "grid") {
     j["modes"] = r.modes;
     j["border_mass"] = r.border_mass;

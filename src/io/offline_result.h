@@ -11,6 +11,7 @@
 #include "pc_ekf/filter/predictive_check.h"
 #include "pc_ekf/filter/prior_sensitivity.h"
 #include "pc_ekf/filter/safeguard_rates.h"
+#include "pc_ekf/filter/update_safeguards.h"
 #include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
@@ -98,6 +99,8 @@ struct OfflineResult {
   // One-step with filter.horizon.clock_offset: the estimate (s) at the end; NaN: none.
   double clock_offset = std::numeric_limits<double>::quiet_NaN();
   double clock_offset_std = std::numeric_limits<double>::quiet_NaN();
+  // One-step with filter.horizon's nuisance values: their estimates at the end.
+  std::vector<NuisanceValue> nuisance;
   // One-step: the safeguards' rates at the last sample (window and run,
   // docs/method.md §5.9; drive health), and the samples at which a rate's
   // window check was flagged (informational, like nis_window_violations).

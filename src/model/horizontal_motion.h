@@ -59,6 +59,38 @@ class RoadWithMotion : public ContactRoad {
   std::shared_ptr<const HorizontalMotion> motion_;
 };
 
+// A road's cross-fall (crown) under the vehicle: beta, rad, left side up > 0
+// (a 2 % cross-fall is beta = 0.02). `start` from t = 0, changing to `end`
+// by a half-cosine over [at, at + over] s (over 0: a step at `at`, from
+// t > at; start == end: constant). Time-based: at speed V the change spans V over metres.
+struct CrossFall {
+  double start = 0.0, end = 0.0, at = 0.0, over = 0.0;
+  bool active() const { return start != 0.0 || end != 0.0; }
+  double angle(double t) const;
+  double rate(double t) const;  // d beta / dt, rad/s
+};
+
+// A motion on a cross-fall: the vehicle, tilted rigidly with the road by
+// beta, feels gravity's component g sin(beta) along its y axis as a lateral
+// specific force: a_y of `inner` (null: none) plus g sin(beta(t)); speed and
+// yaw rate are inner's. (g cos(beta) for the vertical is not applied: a
+// 2e-4 relative difference at 2 %.) The gyro's share, d beta / dt, is added
+// to the readings by the synthetic drive (SyntheticDataSettings::roll_rate).
+class CrossFallMotion : public HorizontalMotion {
+ public:
+  CrossFallMotion(std::shared_ptr<const ContactRoad> road, const CrossFall& cross_fall,
+                  double gravity);
+  HorizontalState at(double t) const override;
+  std::vector<double> breakpoints(double t0, double t1) const override;
+  bool accelerates() const override { return true; }
+
+ private:
+  std::shared_ptr<const ContactRoad> road_;  // keeps the inner motion alive
+  const HorizontalMotion* inner_;
+  CrossFall c_;
+  double gravity_;
+};
+
 // The union of two sorted breakpoint lists, sorted, without duplicates.
 std::vector<double> mergeBreakpoints(std::vector<double> a, const std::vector<double>& b);
 

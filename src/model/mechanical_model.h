@@ -49,6 +49,14 @@ class ModelBatch {
   virtual void readingsShifted(double t, double shift, Eigen::ArrayXXd& y) const {
     readings(t - shift, y);
   }
+  // Road-free models whose roll is the gyro's integral: point q's later
+  // readings take the roll as that plus roll[q] (rad: a tilt the gyro never
+  // saw, less a gyro bias's drift) and the lateral acceleration a_y plus
+  // lateral[q] (m/s^2: a road's cross-fall beta gives g sin(beta)); one
+  // entry per point. False: not supported.
+  virtual bool offsetPoints(const Eigen::VectorXd& /*roll*/, const Eigen::VectorXd& /*lateral*/) {
+    return false;
+  }
 };
 
 // How readings are zeroed (measurement.zero), docs/method.md §1.6:

@@ -18,6 +18,8 @@ struct RoadFreeConstants {
     double roll_static, gravity, rest_y, rest_z;
     // Heights and bar (docs/models.md): k_a, S = m h_b + M h_M, z_I.
     double bar, first_moment, imu_height;
+    // ModelBatch::offsetPoints: added to the roll and to a_y (0: none).
+    double roll_offset, lateral_offset;
   };
   std::vector<Point> points;
   DamperLaw law = DamperLaw::kTanh;
@@ -36,8 +38,11 @@ namespace {
 constexpr int kU1 = 0, kV1 = 2, kMaxInputs = 7;  // u1 u2 v1 v2 [gyro_x] [speed gyro_z]
 
 // a_y = speed x yaw rate from the inputs (0 when they are not read).
-double lateralOf(const RoadFreeConstants& c, const double* in) {
-  return c.speed < 0 ? 0.0 : in[c.speed] * in[c.yaw];
+// Plus the point's lateral offset (a cross-fall's g sin(beta)).
+double lateralOf(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, const double* in) {
+  double a = c.speed < 0 ? 0.0 : in[c.speed] * in[c.yaw];
+  if (p.lateral_offset != 0.0) a += p.lateral_offset;  // (0: today's bit for bit)
+  return a;
 }
 
 // phi'' and g + a at the IMU for inputs `in` and the roll since rest `roll`.
@@ -70,7 +75,7 @@ double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Poi
   const double specific_p = (f[0] + f[1]) * p.inv_total;  // g + a_P
   const double phi_dd =
       (cos_phi * (p.cg * f[0] - p.rear_arm * f[1]) +
-       p.first_moment * (lateralOf(c, in) * cos_phi + specific_p * std::sin(phi))) *
+       p.first_moment * (lateralOf(c, p, in) * cos_phi + specific_p * std::sin(phi))) *
       p.inv_inertia;
   *specific = specific_p - p.imu_arm * phi_dd;
   return phi_dd;
@@ -90,7 +95,7 @@ void outputs(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, cons
   out[2] = gyro_before + 0.5 * (phi_dd + phi_dd_before) * dt;
   if (c.elevated) {
     // The tilted a_y and the IMU's height z_I (phi' the gyro read, when it is).
-    const double a_y = lateralOf(c, now), rate = c.gyro < 0 ? 0.0 : now[c.gyro];
+    const double a_y = lateralOf(c, p, now), rate = c.gyro < 0 ? 0.0 : now[c.gyro];
     out[0] = a_y * std::cos(phi) + specific * std::sin(phi) - p.imu_height * phi_dd - p.rest_y;
     out[1] = specific * std::cos(phi) - a_y * phi - p.imu_height * rate * rate - p.rest_z;
     return;
@@ -118,6 +123,16 @@ class RoadFreeBatch : public ModelBatch {
     return y;
   }
   void readings(double t, Eigen::ArrayXXd& y) const override { readingsShifted(t, 0.0, y); }
+  bool offsetPoints(const Eigen::VectorXd& roll, const Eigen::VectorXd& lateral) override {
+    if (c_->gyro < 0 || roll.size() != pointCount() || lateral.size() != pointCount()) return false;
+    for (int q = 0; q < pointCount(); ++q) {
+      RoadFreeConstants::Point& p = c_->points[static_cast<std::size_t>(q)];
+      p.roll_offset = roll[q];
+      p.lateral_offset = lateral[q];
+      if (p.lateral_offset != 0.0) c_->elevated = true;  // a_y's terms
+    }
+    return true;
+  }
   // The suspension's inputs (and speed and yaw rate, which drive the body) at
   // t - shift; the gyro, the roll integrated from it and the previous
   // sample's instant on the IMU's clock (t).
@@ -141,8 +156,13 @@ class RoadFreeBatch : public ModelBatch {
     const double roll_before = gyro && !at_rest ? in_->integral(gyro_at, t_before) : 0.0;
     double out[3];
     for (Eigen::Index q = 0; q < y.cols(); ++q) {
-      outputs(*c_, c_->points[static_cast<std::size_t>(q)], now, before, at_rest, t - t_before,
-              roll, roll_before, gyro_before, out);
+      const RoadFreeConstants::Point& p = c_->points[static_cast<std::size_t>(q)];
+      if (p.roll_offset != 0.0) {  // (0: today's values bit for bit)
+        outputs(*c_, p, now, before, at_rest, t - t_before, roll + p.roll_offset,
+                roll_before + p.roll_offset, gyro_before, out);
+      } else {
+        outputs(*c_, p, now, before, at_rest, t - t_before, roll, roll_before, gyro_before, out);
+      }
       for (int r = 0; r < 3; ++r) y(r, q) = out[r];
     }
   }

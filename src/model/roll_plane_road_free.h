@@ -17,6 +17,9 @@
 //   accel_z = (g + a) cos phi (rest: minus g sin phi_s, g cos phi_s);
 //   gyro_x at t_k = the measured gyro at the previous sample t_{k-1} plus the
 //     trapezoid of phi'' over [t_{k-1}, t_k] (the increment: no drift).
+// Per point, ModelBatch::offsetPoints adds a roll offset to phi (the
+// estimator's angle error and gyro bias drift) and a lateral specific force
+// to a_y (a road's cross-fall beta: g sin(beta); docs/method.md §4.12).
 #pragma once
 
 #include <memory>

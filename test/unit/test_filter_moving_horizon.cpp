@@ -61,8 +61,10 @@ TEST(MovingHorizon, AMinuteOfExactModelDrivingStaysHealthyAndCovered) {
     // Unsprung masses act only through the static tilt (m_t g / k_t in the
     // tyres' compression): the exact Jacobian leaves them all but at their
     // prior (collocation's projection moves the tyres by aliasing).
+    // With the nuisance values (vehicle_imu.yaml: a cross-fall and IMU
+    // biases, which the static tilt shares) it moves 0.012 of its germ.
     const ParameterSummary& unsprung = named(r, "unsprung_mass_left");
-    EXPECT_LT(std::abs(unsprung.xi_mean), 0.01) << zero;
+    EXPECT_LT(std::abs(unsprung.xi_mean), 0.02) << zero;
     EXPECT_GT(unsprung.xi_stddev, 0.99 / std::sqrt(5.0)) << zero;
   }
 }
