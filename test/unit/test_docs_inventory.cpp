@@ -109,7 +109,8 @@ std::vector<std::string> referenceDocs() {
 // Before/after and dated wording: what a config or the code did once.
 const std::regex& beforeAfter() {
   static const std::regex r(
-      "used to be|as the file had it|had it before|earlier setting|no longer uses|"
+      "used to be|as the file had it|had it before|earlier setting|no longer uses|\\btoday\\b|"
+      "the file had then|as shipped now|"
       "\\bbefore:|\\bnow\\b[^.]*\\binstead of\\b|\\b20[0-9]{2}-[01][0-9]-[0-3][0-9]\\b",
       std::regex::icase);
   return r;
