@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """The filters against the converged reference posterior at n = 15
-(docs/real_vehicle_reference.md §5), or on the full car (--full-car, §3).
+(docs/studies/real_vehicle_reference.md §5), or on the full car (--full-car, §3).
 
   /usr/bin/python3 scripts/reference_study.py BIN_DIR [--samples 25000] [--records 1,2,...]
       [--override YAML] [--full-car [--config FILE] [--exact-body]]

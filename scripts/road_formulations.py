@@ -1,6 +1,6 @@
 #!/usr/bin/python3
 """Road-free formulations measured against each other on a linear quarter car,
-where every posterior is computable exactly (docs/road_free_formulations.md).
+where every posterior is computable exactly (docs/studies/road_free_formulations.md).
 
   /usr/bin/python3 scripts/road_formulations.py [--seeds N] [--quick]
 

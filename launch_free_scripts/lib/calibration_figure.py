@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Figure of docs/real_vehicle.md: one loaded record (150 kg at 0.62 m) of a
+"""Figure of docs/studies/real_vehicle_studies.md: one loaded record (150 kg at 0.62 m) of a
 vehicle whose nine suspension values are off by 2-6 %, estimated with
 config/vehicle_live.yaml's tolerances alone and with the vehicle file of a
 calibration (80 kg at 0.762 m known) on the same vehicle.

@@ -9,7 +9,7 @@ section is what differs. ES-MDA runs with config/vehicle_live.yaml's
 inflation schedule and restarts (not its local covariance) and the one-step
 filters with its re-linearisation in every row: the table judges the methods as they are configured for data from
 a real vehicle (the paper configs keep [4, 4, 4, 4] and no re-linearisation;
-what both cost there is measured in docs/results.md).
+what both cost there is measured in docs/studies/results.md).
 """
 import os
 import sys
@@ -96,7 +96,7 @@ def main():
             config.setdefault("filter", {})[key] = dict(LIVE_FILTER[key])
         # The passes and their restarts; the local covariance (vehicle_live.yaml's
         # es_mda.covariance) is for its 13 tolerances' ridge and measured there
-        # (docs/real_vehicle_reference.md §5), not on these two- to four-parameter rows.
+        # (docs/studies/real_vehicle_reference.md §5), not on these two- to four-parameter rows.
         config["filter"]["es_mda"].pop("covariance", None)
         path = os.path.join(out_dir, "configs", name + ".yaml")
         with open(path, "w") as f:

@@ -6,7 +6,7 @@
 // of the exact posterior's at n = 15 while its mean was within 0.3 std. The
 // Gauss-Newton information of the exact model at that mean, J^T R^-1 J, plus
 // the prior's (as Gaussian as every update here takes it), gives
-// 0.85-1.15 on the same records (docs/real_vehicle_reference.md §5).
+// 0.85-1.15 on the same records (docs/studies/real_vehicle_reference.md §5).
 #pragma once
 
 #include <Eigen/Dense>

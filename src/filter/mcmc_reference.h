@@ -23,7 +23,7 @@
 // existing callers' draws do not change. On vehicle_live.yaml's n = 15 ridge
 // with 1 % noise none of the three chain samplers converges within 10
 // minutes; the conditional Laplace does in seconds
-// (docs/real_vehicle_reference.md §5).
+// (docs/studies/real_vehicle_reference.md §5).
 #pragma once
 
 #include <Eigen/Dense>

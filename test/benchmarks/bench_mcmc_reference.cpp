@@ -1,4 +1,4 @@
-// The 11-parameter reference of docs/real_vehicle_reference.md: one speed-bump
+// The 11-parameter reference of docs/studies/real_vehicle_reference.md: one speed-bump
 // record (test/benchmarks/tolerances_n11.yaml: M, d_CG and nine tolerances,
 // data from a vehicle off by a few percent), estimated by one-step (square
 // root) and ES-MDA, and sampled by the long-chain MCMC reference

@@ -1,11 +1,11 @@
-// The sensitivity's reference (docs/real_vehicle_reference.md §4): total
+// The sensitivity's reference (docs/studies/real_vehicle_reference.md §4): total
 // Sobol indices by the Jansen estimator on plain Monte Carlo runs of the
 // model, against estimate_offline --sensitivity's (simulated_sensitivity.h),
 // on vehicle_live.yaml over the paper bump, N = 100. Prints per parameter and
 // channel both, the Jansen estimate's 95 % half-width, the largest difference
 // over the indices >= 0.05 and whether the top 3 per channel agree; then, per
 // parameter, the largest index of each and of the filters' re-projected
-// forecast (prior_sensitivity.h), the comparison of docs/real_vehicle_reference.md §4. Not part
+// forecast (prior_sensitivity.h), the comparison of docs/studies/real_vehicle_reference.md §4. Not part
 // of bench.sh (seconds to a minute).
 //   PC_EKF_JANSEN_SAMPLES (20000 per matrix: (n + 2) x that many runs),
 //   PC_EKF_JANSEN_SEED (7), PC_EKF_JANSEN_CONFIG (vehicle_live.yaml; its road

@@ -1,5 +1,5 @@
 """scripts/road_formulations.py: its exact pieces against brute force and
-closed forms, and a quick run's coverage (docs/road_free_formulations.md)."""
+closed forms, and a quick run's coverage (docs/studies/road_free_formulations.md)."""
 import math
 
 import numpy as np

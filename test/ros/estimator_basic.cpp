@@ -141,7 +141,7 @@ TEST_F(EstimatorBasic, EstimateBatchEqualsEsMdaOffline) {
   expectSameEstimate(
       batch, estimateOffline("--config " + configPath("speed_bump.yaml") + " --method es_mda"),
       1e-9, "es_mda");
-  // ES-MDA is tighter than the one-step filter on the same record (docs/results.md: case A).
+  // ES-MDA is tighter than the one-step filter on the same record (docs/studies/results.md: case A).
   EXPECT_LT(batch.stddev[0], estimates_.messages().back().stddev[0]);
 }
 

@@ -1,16 +1,20 @@
 // The docs' inventories are complete: every executable and script the
 // package installs (CMakeLists.txt) is in docs/tools.md, every rostest
-// (test/ros/*.test) in docs/reliability.md's rostest table. And the docs
-// say what the code does: their history (commit hashes, times of day,
-// work-log wording) lives in CHANGELOG.md only.
+// (test/ros/*.test) in docs/reliability.md's rostest table. The docs say
+// what the code does: their history (commit hashes, times of day, dates,
+// work-log and before/after wording) lives in CHANGELOG.md only, studies
+// (docs/studies/) excepted. The user path stays short, and every relative
+// link in README.md and docs/ leads to a file that exists.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <regex>
 #include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -88,13 +92,34 @@ const std::regex& commitHash() {
   return hash;
 }
 
-// README.md and docs/*.md: no commit hash (7-40 hex digits with a letter
-// and a digit), no time of day (hh:mm) and no work-log phrase.
-TEST(DocsInventory, HistoryIsOnlyInTheChangelog) {
+// README.md and every docs/**/*.md outside docs/studies/ (the measurement
+// reports, which record what was tried).
+std::vector<std::string> referenceDocs() {
   std::vector<std::string> files = {"README.md"};
-  for (const auto& e : std::filesystem::directory_iterator(kRoot + "/docs")) {
-    if (e.path().extension() == ".md") files.push_back("docs/" + e.path().filename().string());
+  for (const auto& e : std::filesystem::recursive_directory_iterator(kRoot + "/docs")) {
+    if (e.path().extension() != ".md") continue;
+    const std::string rel = std::filesystem::relative(e.path(), kRoot).generic_string();
+    if (rel.rfind("docs/studies/", 0) == 0) continue;
+    files.push_back(rel);
   }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Before/after and dated wording: what a config or the code did once.
+const std::regex& beforeAfter() {
+  static const std::regex r(
+      "used to be|as the file had it|had it before|earlier setting|no longer uses|\\btoday\\b|"
+      "the file had then|as shipped now|"
+      "\\bbefore:|\\bnow\\b[^.]*\\binstead of\\b|\\b20[0-9]{2}-[01][0-9]-[0-3][0-9]\\b",
+      std::regex::icase);
+  return r;
+}
+
+// No commit hash (7-40 hex digits with a letter and a digit), no time of
+// day (hh:mm), no date, no work-log or before/after phrase.
+TEST(DocsInventory, HistoryIsOnlyInTheChangelog) {
+  const std::vector<std::string> files = referenceDocs();
   EXPECT_GT(files.size(), 10u);
   const std::regex& hash = commitHash();
   const std::regex clock("\\b([01][0-9]|2[0-3]):[0-5][0-9]\\b");
@@ -107,7 +132,7 @@ TEST(DocsInventory, HistoryIsOnlyInTheChangelog) {
     for (std::string line; std::getline(text, line);) {
       ++line_number;
       std::smatch m;
-      for (const std::regex* r : {&hash, &clock, &log}) {
+      for (const std::regex* r : {&hash, &clock, &log, &beforeAfter()}) {
         if (std::regex_search(line, m, *r)) {
           ADD_FAILURE() << file << ":" << line_number << ": '" << m[0]
                         << "' is history; it belongs in CHANGELOG.md";
@@ -117,11 +142,74 @@ TEST(DocsInventory, HistoryIsOnlyInTheChangelog) {
   }
 }
 
+// The user path (getting started, configure, read the estimate) stays a
+// short read.
+TEST(DocsInventory, UserPathIsShort) {
+  int lines = 0;
+  for (const char* file :
+       {"docs/getting_started.md", "docs/configure.md", "docs/read_the_estimate.md"}) {
+    const std::string text = fileText(file);
+    lines += static_cast<int>(std::count(text.begin(), text.end(), '\n'));
+  }
+  EXPECT_GT(lines, 100);
+  EXPECT_LE(lines, 1200) << "the user path has " << lines << " lines";
+}
+
+// Relative link targets of a markdown text, outside code blocks and code spans.
+std::vector<std::string> relativeLinks(const std::string& markdown) {
+  std::vector<std::string> out;
+  std::istringstream text(markdown);
+  bool fenced = false;
+  const std::regex span("`[^`]*`");
+  const std::regex link("\\]\\(([^)\\s]+)\\)");
+  const std::regex absolute("^[a-zA-Z][a-zA-Z0-9+.-]*:");
+  for (std::string line; std::getline(text, line);) {
+    if (line.rfind("```", 0) == 0) {
+      fenced = !fenced;
+      continue;
+    }
+    if (fenced) continue;
+    const std::string prose = std::regex_replace(line, span, "");
+    for (auto it = std::sregex_iterator(prose.begin(), prose.end(), link);
+         it != std::sregex_iterator(); ++it) {
+      const std::string target = (*it)[1].str();
+      if (target.empty() || target[0] == '#' || std::regex_search(target, absolute)) continue;
+      out.push_back(target.substr(0, target.find('#')));
+    }
+  }
+  return out;
+}
+
+TEST(DocsInventory, EveryRelativeLinkLeadsToAFile) {
+  std::vector<std::string> files = {"README.md"};
+  for (const auto& e : std::filesystem::recursive_directory_iterator(kRoot + "/docs")) {
+    if (e.path().extension() == ".md") {
+      files.push_back(std::filesystem::relative(e.path(), kRoot).generic_string());
+    }
+  }
+  int links = 0;
+  for (const std::string& file : files) {
+    const std::filesystem::path dir = std::filesystem::path(kRoot) / file;
+    for (const std::string& target : relativeLinks(fileText(file))) {
+      ++links;
+      EXPECT_TRUE(std::filesystem::exists(dir.parent_path() / target))
+          << file << " links to " << target << ", which does not exist";
+    }
+  }
+  EXPECT_GT(links, 50);
+}
+
 // The check above finds what it looks for.
 TEST(DocsInventory, HistoryPatternsMatch) {
   const std::regex& hash = commitHash();
   EXPECT_TRUE(std::regex_search(std::string("a clean checkout of b05076a"), hash));
   EXPECT_FALSE(std::regex_search(std::string("1000000 samples, defaced"), hash));
+  EXPECT_TRUE(std::regex_search(std::string("shrink 0.01, as the file had it"), beforeAfter()));
+  EXPECT_TRUE(std::regex_search(std::string("measured on 2026-12-05"), beforeAfter()));
+  EXPECT_FALSE(std::regex_search(std::string("124 points instead of 306"), beforeAfter()));
+  const std::vector<std::string> links =
+      relativeLinks("[a](b.md#c) `[x](y.md)` [w](https://e.org) [s](#t)\n```\n[u](v.md)\n```\n");
+  EXPECT_EQ(links, std::vector<std::string>{"b.md"});
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ TEST(SimulatedSensitivity, LeadingGermBasisCounts) {
 // The filters' order-2 forecast gave bar_inertia 0.54 and position 0.05 (its
 // truncation), and on plain Halton points damping_right 0.115. The top 3 per
 // channel are those of a Jansen estimate on this package's model (20,000
-// samples per matrix, 340,000 simulations; docs/real_vehicle_reference.md §4),
+// samples per matrix, 340,000 simulations; docs/studies/real_vehicle_reference.md §4),
 // whose indices agree with the peer's within its intervals.
 TEST(PriorSensitivity, ShippedLiveConfigAgainstAPeer) {
   EstimatorConfig c = loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml");

@@ -7,7 +7,7 @@
 // noise is the R the filter assumes. A run covers the load when M, x and y are
 // all within 3 reported std of the truth; a silent failure is a healthy miss.
 // 4 records in the suite; PC_EKF_FULL_CAR_RECORDS=N for the study of
-// docs/real_vehicle_reference.md, PC_EKF_STUDY_VERBOSE=1 prints every run.
+// docs/studies/real_vehicle_reference.md, PC_EKF_STUDY_VERBOSE=1 prints every run.
 // Study switches (same loads and seeds): PC_EKF_FULL_CAR_EXACT_VEHICLE=1 gives
 // the truth the configured vehicle; PC_EKF_FULL_CAR_DESIGN=order,points
 // replaces the PC order and the number of Halton points;

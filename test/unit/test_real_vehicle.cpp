@@ -23,7 +23,7 @@ namespace pc_ekf {
 namespace {
 
 const std::string kLive = std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_live.yaml";
-// 6 vehicles in the suite; PC_EKF_STUDY_VEHICLES=N for the larger study of docs/real_vehicle.md.
+// 6 vehicles in the suite; PC_EKF_STUDY_VEHICLES=N for the larger study of docs/studies/real_vehicle_studies.md.
 int vehicles() {
   const char* n = std::getenv("PC_EKF_STUDY_VEHICLES");
   return n ? std::atoi(n) : 6;
@@ -192,7 +192,7 @@ TEST(RealVehicle, TolerancesAloneCoverTheLoad) {
     // re-linearisation and ES-MDA's restarts (vehicle_live.yaml): one-step
     // 0.85, ES-MDA 0.84 over 40 runs (PC_EKF_STUDY_VEHICLES=20), no healthy
     // miss; before, one-step reported a std about 25 % small (1.33) and
-    // missed d_CG at 3.1 std on one healthy run (docs/real_vehicle.md).
+    // missed d_CG at 3.1 std on one healthy run (docs/studies/real_vehicle_studies.md).
     EXPECT_LT(t.zRms(), 1.25) << toString(kMethods[m]);
     EXPECT_EQ(t.silent, 0) << toString(kMethods[m]);
   }

@@ -2,8 +2,8 @@
 // told, for both built-in models: the shipped configs' load estimates cover
 // the truth within 3 reported std over loads, vehicles, zero conventions and
 // noise seeds, none is silent (wrong and healthy), and the model errors the
-// formulation can see are flagged (docs/real_vehicle.md, "Which sensors,
-// which settings"; scripts/road_free_study.py is the larger study).
+// formulation can see are flagged (docs/studies/real_vehicle_studies.md, "Road-free:
+// the roads and the zero"; scripts/road_free_study.py is the larger study).
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
@@ -195,7 +195,7 @@ TEST(RoadFreeCoverage, ModelErrorsAreFlagged) {
   // With tare: a left spring 25 % stiffer than its value (15 % beyond its
   // 10 % tolerance) on ISO C and on the paper bump, and the IMU 5 cm right of
   // where it is told (tolerance 2 %, 15 mm): every run not healthy. (With
-  // rest on a smooth road neither shows in the readings: docs/real_vehicle.md.)
+  // rest on a smooth road neither shows in the readings: docs/studies/real_vehicle_studies.md.)
   const std::vector<std::pair<std::string, double>> roads = {
       {"{source: iso8608, speed_kmh: 54.0, iso8608: {class: C, seed: 3}}", 10.0},
       {"{source: speed_bump}", 3.0}};
