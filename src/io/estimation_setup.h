@@ -8,7 +8,7 @@
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
 #include "pc_ekf/filter/one_step_filter.h"
 #include "pc_ekf/filter/pc_propagator.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/pdf_sampler.h"

@@ -9,7 +9,7 @@
 #include <set>
 #include <sstream>
 
-#include "pc_ekf/filter/posterior_coarse_grid.h"
+#include "pc_ekf/reference/posterior_coarse_grid.h"
 #include "pc_ekf/io/config_identity.h"
 #include "pc_ekf/io/tolerances.h"
 #include "pc_ekf/io/vehicle_file.h"

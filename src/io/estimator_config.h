@@ -16,7 +16,7 @@
 #include "pc_ekf/filter/health.h"
 #include "pc_ekf/filter/kalman_update.h"
 #include "pc_ekf/filter/measurement.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/filter/update_safeguards.h"

@@ -8,8 +8,6 @@
 #include <limits>
 #include <sstream>
 
-#include "pc_ekf/model/roll_plane_model.h"
-
 namespace pc_ekf {
 namespace {
 
@@ -120,10 +118,6 @@ std::ifstream openOrThrow(const std::string& path) {
 }
 
 }  // namespace
-
-const std::vector<std::string>& rollPlaneChannels() {
-  return rollPlaneDescription().channelNames();
-}
 
 MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
                                      const std::vector<std::string>& channels) {

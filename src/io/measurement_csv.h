@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/model/roll_plane_model.h"  // rollPlaneChannels(): the default channels
 
 namespace pc_ekf {
 
@@ -21,7 +22,6 @@ class CsvError : public std::runtime_error {
 };
 
 // `channels`: the model's channel names (column c+1 = channel c).
-const std::vector<std::string>& rollPlaneChannels();
 MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
                                      const std::vector<std::string>& channels = rollPlaneChannels());
 MeasurementSeries readMeasurementCsvFile(

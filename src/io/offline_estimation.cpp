@@ -9,7 +9,7 @@
 
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_one_step.h"
 #include "pc_ekf/io/offline_parts.h"

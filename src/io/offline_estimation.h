@@ -13,7 +13,7 @@
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/pc_propagator.h"
-#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/health/predictive_check.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/offline_result.h"
 #include "pc_ekf/io/road_free_stream.h"

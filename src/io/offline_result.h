@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "pc_ekf/filter/predictive_check.h"
-#include "pc_ekf/filter/prior_sensitivity.h"
+#include "pc_ekf/health/predictive_check.h"
+#include "pc_ekf/sensitivity/prior_sensitivity.h"
 #include "pc_ekf/filter/safeguard_rates.h"
 #include "pc_ekf/filter/update_safeguards.h"
 #include "pc_ekf/pc/pc_statistics.h"

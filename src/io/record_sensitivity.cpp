@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "pc_ekf/filter/simulated_sensitivity.h"
+#include "pc_ekf/sensitivity/simulated_sensitivity.h"
 #include "pc_ekf/io/estimation_setup.h"
 
 namespace pc_ekf {

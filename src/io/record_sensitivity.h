@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/measurement.h"
-#include "pc_ekf/filter/prior_sensitivity.h"
+#include "pc_ekf/sensitivity/prior_sensitivity.h"
 #include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "pc_ekf/filter/prior_sensitivity.h"
+#include "pc_ekf/sensitivity/prior_sensitivity.h"
 #include "pc_ekf/io/estimator_config.h"
 
 namespace pc_ekf {

@@ -96,7 +96,14 @@ const ModelFields<RollPlaneFields>& fields() {
 
 }  // namespace
 
+const std::vector<std::string>& rollPlaneChannels() {
+  static const std::vector<std::string> names{"u1",     "u2",      "v1",    "v2",    "accel_y",
+                                              "accel_z", "gyro_x", "speed", "gyro_z"};
+  return names;
+}
+
 const ModelDescription& rollPlaneDescription() {
+  const std::vector<std::string>& ch = rollPlaneChannels();
   static const ModelDescription d({
       "roll_plane",
       "The paper's 4-DOF roll-plane bar on two suspensions, left (1) and right (2) "
@@ -105,20 +112,20 @@ const ModelDescription& rollPlaneDescription() {
       fields().settings().table(),
       {damperChoiceWithTable()},
       {"x1", "x2", "xr1", "xr2", "x1dot", "x2dot", "xr1dot", "xr2dot"},
-      {{"u1", "m", "suspension extension x1 - xr1, left"},
-       {"u2", "m", "suspension extension x2 - xr2, right"},
-       {"v1", "m/s", "suspension extension rate, left"},
-       {"v2", "m/s", "suspension extension rate, right"},
-       {"accel_y", "m/s^2",
+      {{ch[0], "m", "suspension extension x1 - xr1, left"},
+       {ch[1], "m", "suspension extension x2 - xr2, right"},
+       {ch[2], "m/s", "suspension extension rate, left"},
+       {ch[3], "m/s", "suspension extension rate, right"},
+       {ch[4], "m/s^2",
         "IMU specific force along body y (left): (g + a) sin(phi) + a_y cos(phi) - z_I phi''",
         false},
-       {"accel_z", "m/s^2",
+       {ch[5], "m/s^2",
         "IMU specific force along body z (up): (g + a) cos(phi) - a_y phi - z_I phi'^2", false},
-       {"gyro_x", "rad/s", "IMU roll rate (phi > 0: left side up)", false},
-       {"speed", "m/s", "forward speed over ground (the drive's horizontal motion)", false},
-       {"gyro_z", "rad/s", "yaw rate, positive turning left: a_y / speed", false}},
+       {ch[6], "rad/s", "IMU roll rate (phi > 0: left side up)", false},
+       {ch[7], "m/s", "forward speed over ground (the drive's horizontal motion)", false},
+       {ch[8], "rad/s", "yaw rate, positive turning left: a_y / speed", false}},
       {{"left", "y1", "left tyre"}, {"right", "y2", "right tyre"}},
-      {{"left_suspension", "left", "u1", "v1"}, {"right_suspension", "right", "u2", "v2"}},
+      {{"left_suspension", "left", ch[0], ch[2]}, {"right_suspension", "right", ch[1], ch[3]}},
   });
   return d;
 }

@@ -25,6 +25,11 @@ namespace pc_ekf {
 // defaults, domains), settings, channels u1 u2 v1 v2, contacts, joints.
 const ModelDescription& rollPlaneDescription();
 
+// The roll plane's channel names, in the channels' order (RollPlaneModel's
+// channel indices): u1 u2 v1 v2 accel_y accel_z gyro_x speed gyro_z. The one
+// list the description, the model type and the road-free model read.
+const std::vector<std::string>& rollPlaneChannels();
+
 // The roll plane's fields, declared once over the element type (field_table.h):
 // the parameters, in the order of rollPlaneDescription()'s table, then the
 // settings. RollPlaneFields<int>: each field's row in its table.

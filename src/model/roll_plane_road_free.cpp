@@ -182,24 +182,27 @@ RollPlaneRoadFreeModel::RollPlaneRoadFreeModel(const VehicleParameters& nominal,
       inputs_(std::move(inputs)),
       zero_(zero),
       nominal_vector_(nominal.toVector()),
-      state_names_{"reading_accel_y", "reading_accel_z", "reading_gyro_x"},
+      state_names_{"reading_" + rollPlaneChannels()[4], "reading_" + rollPlaneChannels()[5],
+                   "reading_" + rollPlaneChannels()[kGyroChannel]},
       h_(Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, 3)) {
   if (!inputs_) throw std::invalid_argument("road-free roll plane: no inputs");
   // u1 u2 v1 v2, then gyro_x, speed and gyro_z when read (speed with gyro_z).
-  const std::vector<std::string> suspension{"u1", "u2", "v1", "v2"};
+  const std::vector<std::string>& ch = rollPlaneChannels();
+  const std::vector<std::string> suspension(ch.begin(),
+                                            ch.begin() + RollPlaneModel::kSuspensionChannels);
   std::vector<std::string> names = inputs_->names();
   const auto position = [&](const std::string& name) {
     const auto it = std::find(names.begin(), names.end(), name);
     return it == names.end() ? -1 : static_cast<int>(it - names.begin());
   };
-  gyro_ = position("gyro_x");
-  speed_ = position("speed");
-  yaw_ = position("gyro_z");
+  gyro_ = position(ch[kGyroChannel]);
+  speed_ = position(ch[kSpeedChannel]);
+  yaw_ = position(ch[kYawChannel]);
   std::vector<std::string> expected = suspension;
-  if (gyro_ >= 0) expected.push_back("gyro_x");
+  if (gyro_ >= 0) expected.push_back(ch[kGyroChannel]);
   if (speed_ >= 0 || yaw_ >= 0) {
-    expected.push_back("speed");
-    expected.push_back("gyro_z");
+    expected.push_back(ch[kSpeedChannel]);
+    expected.push_back(ch[kYawChannel]);
   }
   if (names != expected) {
     throw std::invalid_argument(

@@ -81,7 +81,7 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
   Eigen::MatrixXd h_;
   int spring_force_sum_ = -1;  // tare: ReadingInputs::sampleSum's handle
   int gyro_ = -1, speed_ = -1, yaw_ = -1;  // the optional inputs' places (-1: not read)
-  static constexpr int kSpeedChannel = 7, kYawChannel = 8;
+  static constexpr int kGyroChannel = 6, kSpeedChannel = 7, kYawChannel = 8;
 };
 
 }  // namespace pc_ekf

@@ -29,7 +29,8 @@ class RollPlaneType : public ModelType {
                                                     zero);
   }
   RoadFreeInputs roadFreeInputs() const override {
-    return {{"u1", "u2", "v1", "v2"}, {"gyro_x", "speed", "gyro_z"}};
+    const std::vector<std::string>& ch = rollPlaneChannels();  // u1 u2 v1 v2, gyro_x speed gyro_z
+    return {{ch.begin(), ch.begin() + RollPlaneModel::kSuspensionChannels}, {ch[6], ch[7], ch[8]}};
   }
   std::string equilibriumSummary(const ModelParameters& laws,
                                  const Eigen::VectorXd& values) const override {

@@ -5,7 +5,7 @@
 #include <sstream>
 
 #include "pc_ekf/filter/batch_update.h"
-#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/health/predictive_check.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/pc/pc_statistics.h"

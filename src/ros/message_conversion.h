@@ -21,7 +21,7 @@
 #include "pc_ekf/filter/imu_alignment.h"
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/one_step_filter.h"
-#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/health/predictive_check.h"
 #include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/model/model_type.h"

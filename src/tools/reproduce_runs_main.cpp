@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/synthetic_data.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/ros/model_plugins.h"

@@ -12,7 +12,7 @@
 
 #include "bench_support.h"
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 
 namespace pc_ekf::bench {

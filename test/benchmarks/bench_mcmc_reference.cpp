@@ -18,7 +18,7 @@
 #include <string>
 
 #include "bench_support.h"
-#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/reference/mcmc_reference.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/io/road_free_stream.h"
 

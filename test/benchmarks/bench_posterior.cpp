@@ -2,7 +2,7 @@
 // coarse 101^2 grid of full simulations + Levenberg-Marquardt + fine
 // principal-axis grids, on both cores (grid.threads = 2). Wall time.
 #include "bench_support.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 
 namespace pc_ekf::bench {
 namespace {

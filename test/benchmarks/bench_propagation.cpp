@@ -17,7 +17,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "bench_support.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/pc/pc_statistics.h"
 

@@ -16,7 +16,7 @@
 #include <random>
 
 #include "bench_support.h"
-#include "pc_ekf/filter/simulated_sensitivity.h"
+#include "pc_ekf/sensitivity/simulated_sensitivity.h"
 #include "pc_ekf/io/record_sensitivity.h"
 
 namespace pc_ekf::bench {

@@ -4,7 +4,7 @@
 // parameters uncertain must recover them.
 #include <gtest/gtest.h>
 
-#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/health/predictive_check.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"

@@ -5,7 +5,7 @@
 #include <cmath>
 
 #include "pc_ekf/filter/one_step_filter.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
 

@@ -12,7 +12,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/reference/mcmc_reference.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
 

@@ -1,4 +1,4 @@
-// Sensitivity of a record from the prior forecast (src/filter/prior_sensitivity.h),
+// Sensitivity of a record from the prior forecast (src/sensitivity/prior_sensitivity.h),
 // from whole-record simulations (simulated_sensitivity.h) and tolerances_prune,
 // on y' = B theta, z = y: z_j(t) = t (B theta)_j, so the
 // total index of theta_i on z_j is (B_ji n_i r_i)^2 / sum_k (B_jk n_k r_k)^2 at
@@ -8,8 +8,8 @@
 #include <numeric>
 
 #include "linear_forced_model.h"
-#include "pc_ekf/filter/prior_sensitivity.h"
-#include "pc_ekf/filter/simulated_sensitivity.h"
+#include "pc_ekf/sensitivity/prior_sensitivity.h"
+#include "pc_ekf/sensitivity/simulated_sensitivity.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/record_sensitivity.h"

@@ -11,10 +11,10 @@
 #include <cstdio>
 #include <random>
 
-#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/reference/mcmc_reference.h"
 #include "linear_forced_model.h"
 #include "linear_residual.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/model/roll_plane_model.h"
 

@@ -14,6 +14,7 @@
 #include "pc_ekf/model/full_car_road_free.h"
 #include "pc_ekf/model/input_noise.h"
 #include "pc_ekf/model/integrator.h"
+#include "pc_ekf/model/model_type.h"
 #include "pc_ekf/model/roll_plane_model.h"
 #include "pc_ekf/model/roll_plane_road_free.h"
 #include "pc_ekf/model/road_profile.h"
@@ -85,6 +86,18 @@ TEST(DrivenProfileRoad, ContactsLagByDistanceAtTheSpeed) {
 // are the road-free model's inputs. At the true parameters the road-free
 // accel_z equals the full model's (to the integrator's and the cos(phi)
 // approximation's accuracy), in both conventions.
+// The roll plane's channel names are one list: the description's channels,
+// the model type's road-free inputs and the road-free model's states read it.
+TEST(RollPlaneChannels, OneListForTheDescriptionTheTypeAndTheRoadFreeModel) {
+  const std::vector<std::string> names{"u1",      "u2",     "v1",    "v2",    "accel_y",
+                                       "accel_z", "gyro_x", "speed", "gyro_z"};
+  EXPECT_EQ(pc_ekf::rollPlaneChannels(), names);
+  EXPECT_EQ(pc_ekf::rollPlaneDescription().channelNames(), names);
+  const auto inputs = pc_ekf::rollPlaneType()->roadFreeInputs();
+  EXPECT_EQ(inputs.required, (std::vector<std::string>{"u1", "u2", "v1", "v2"}));
+  EXPECT_EQ(inputs.optional, (std::vector<std::string>{"gyro_x", "speed", "gyro_z"}));
+}
+
 TEST(RollPlaneRoadFree, ReproducesTheFullModelsImuFromItsSuspensionReadings) {
   for (const ZeroConvention zero : {ZeroConvention::kTare, ZeroConvention::kRest}) {
     VehicleParameters p;

@@ -8,9 +8,9 @@
 #include <memory>
 #include <random>
 
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/posterior_prior.h"
 #include "linear_residual.h"
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/filter/trajectory_simulation.h"
 #include "pc_ekf/model/roll_plane_model.h"
 

@@ -1,6 +1,8 @@
-// The source folders are layers, pc <- model <- filter <- io <- ros <- tools:
+// The source folders are layers,
+//   pc <- model <- filter <- {reference, health, sensitivity} <- io <- ros <- tools:
 // a file includes its own folder's headers and those of the layers below,
-// never one above (README, Layout). Inside io/ the files
+// never one above nor a sibling (reference/, health/ and sensitivity/ each
+// build on filter/, not on each other; README, Layout). Inside io/ the files
 // are layered too: taking a header and its .cpp as one unit, no chain of
 // includes leads back to where it started.
 #include <gtest/gtest.h>
@@ -17,13 +19,35 @@ namespace {
 
 namespace fs = std::filesystem;
 
-const std::vector<std::string> kLayers{"pc", "model", "filter", "io", "ros", "tools"};
+// Each folder and the folders it may include (besides its own): those below it.
+const std::map<std::string, std::set<std::string>>& kBelow() {
+  static const std::map<std::string, std::set<std::string>> below = [] {
+    std::map<std::string, std::set<std::string>> b;
+    b["pc"] = {};
+    b["model"] = {"pc"};
+    b["filter"] = {"pc", "model"};
+    for (const char* sibling : {"reference", "health", "sensitivity"}) {
+      b[sibling] = {"pc", "model", "filter"};
+    }
+    b["io"] = {"pc", "model", "filter", "reference", "health", "sensitivity"};
+    b["ros"] = b["io"];
+    b["ros"].insert("io");
+    b["tools"] = b["ros"];
+    b["tools"].insert("ros");
+    return b;
+  }();
+  return below;
+}
 
-int layerOf(const std::string& folder) {
-  for (std::size_t i = 0; i < kLayers.size(); ++i) {
-    if (kLayers[i] == folder) return static_cast<int>(i);
+bool isLayer(const std::string& folder) { return kBelow().count(folder) > 0; }
+
+TEST(SourceLayers, EveryFolderIsALayer) {
+  for (const auto& e : fs::directory_iterator(fs::path(PC_EKF_SOURCE_DIR) / "src")) {
+    if (e.is_directory()) {
+      EXPECT_TRUE(isLayer(e.path().filename().string()))
+          << "src/" << e.path().filename().string() << " has no place in the layers";
+    }
   }
-  return -1;
 }
 
 // Each `#include "pc_ekf/<folder>/<name>.h"` (or <...>) of a file: folder, name.
@@ -49,14 +73,14 @@ std::vector<fs::path> sources(const std::string& folder) {
 
 TEST(SourceLayers, NoIncludeRunsUpTheLayers) {
   int files = 0;
-  for (const std::string& folder : kLayers) {
+  for (const auto& [folder, below] : kBelow()) {
     for (const fs::path& f : sources(folder)) {
       ++files;
       for (const auto& [to, name] : packageIncludes(f)) {
-        if (layerOf(to) < 0) continue;  // messages and other generated headers
-        EXPECT_LE(layerOf(to), layerOf(folder))
+        if (!isLayer(to)) continue;  // messages and other generated headers
+        EXPECT_TRUE(to == folder || below.count(to) > 0)
             << "src/" << folder << "/" << f.filename().string() << " includes pc_ekf/" << to << "/"
-            << name << ".h, a layer above";
+            << name << ".h, a layer above or beside";
       }
     }
   }

@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/predictive_check.h"
+#include "pc_ekf/health/predictive_check.h"
 
 #include <algorithm>
 #include <cmath>

@@ -5,7 +5,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "pc_ekf/filter/mcmc_samplers.h"
+#include "pc_ekf/reference/mcmc_samplers.h"
 
 namespace pc_ekf {
 

@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "pc_ekf/filter/measurement.h"
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/posterior_prior.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/mechanical_model.h"

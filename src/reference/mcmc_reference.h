@@ -31,8 +31,8 @@
 #include <string>
 #include <vector>
 
-#include "pc_ekf/filter/posterior_coarse_grid.h"
-#include "pc_ekf/filter/posterior_mode_search.h"
+#include "pc_ekf/reference/posterior_coarse_grid.h"
+#include "pc_ekf/reference/posterior_mode_search.h"
 #include "pc_ekf/filter/posterior_residual.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 

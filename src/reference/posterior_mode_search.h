@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/posterior_prior.h"
 #include "pc_ekf/filter/posterior_residual.h"
 
 namespace pc_ekf {

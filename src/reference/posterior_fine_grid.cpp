@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/posterior_fine_grid.h"
+#include "pc_ekf/reference/posterior_fine_grid.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -1,5 +1,5 @@
 // Sampling reference posterior: see mcmc_reference.h.
-#include "pc_ekf/filter/mcmc_reference.h"
+#include "pc_ekf/reference/mcmc_reference.h"
 
 #include <algorithm>
 #include <chrono>
@@ -9,8 +9,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "pc_ekf/filter/mcmc_samplers.h"
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/mcmc_samplers.h"
+#include "pc_ekf/reference/posterior_prior.h"
 
 namespace pc_ekf {
 

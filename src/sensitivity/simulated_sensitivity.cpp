@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/simulated_sensitivity.h"
+#include "pc_ekf/sensitivity/simulated_sensitivity.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/posterior_mode_search.h"
+#include "pc_ekf/reference/posterior_mode_search.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,5 +1,5 @@
 // Reference posterior, docs/method.md §4.6: orchestration of the four steps.
-#include "pc_ekf/filter/reference_posterior.h"
+#include "pc_ekf/reference/reference_posterior.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,9 +8,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "pc_ekf/filter/posterior_fine_grid.h"
-#include "pc_ekf/filter/posterior_mode_search.h"
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/posterior_fine_grid.h"
+#include "pc_ekf/reference/posterior_mode_search.h"
+#include "pc_ekf/reference/posterior_prior.h"
 
 namespace pc_ekf {
 

@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/posterior_prior.h"
 
 #include <algorithm>
 #include <cmath>

@@ -37,8 +37,8 @@
 #include <random>
 #include <vector>
 
-#include "pc_ekf/filter/mcmc_reference.h"
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/mcmc_reference.h"
+#include "pc_ekf/reference/posterior_prior.h"
 
 namespace pc_ekf {
 

@@ -8,9 +8,9 @@
 #include <Eigen/Dense>
 #include <vector>
 
-#include "pc_ekf/filter/posterior_coarse_grid.h"
-#include "pc_ekf/filter/posterior_mode_search.h"
-#include "pc_ekf/filter/posterior_prior.h"
+#include "pc_ekf/reference/posterior_coarse_grid.h"
+#include "pc_ekf/reference/posterior_mode_search.h"
+#include "pc_ekf/reference/posterior_prior.h"
 #include "pc_ekf/filter/posterior_residual.h"
 #include "pc_ekf/pc/pc_statistics.h"
 

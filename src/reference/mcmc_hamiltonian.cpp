@@ -2,8 +2,8 @@
 #include <cmath>
 #include <string>
 
-#include "pc_ekf/filter/mcmc_samplers.h"
-#include "pc_ekf/filter/posterior_mode_search.h"
+#include "pc_ekf/reference/mcmc_samplers.h"
+#include "pc_ekf/reference/posterior_mode_search.h"
 
 namespace pc_ekf {
 

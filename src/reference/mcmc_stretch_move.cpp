@@ -1,5 +1,5 @@
 // Stretch-move ensemble sampler: see mcmc_samplers.h.
-#include "pc_ekf/filter/mcmc_samplers.h"
+#include "pc_ekf/reference/mcmc_samplers.h"
 
 #include <cmath>
 #include <string>

@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/posterior_coarse_grid.h"
+#include "pc_ekf/reference/posterior_coarse_grid.h"
 
 #include <algorithm>
 #include <cmath>

@@ -20,7 +20,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "pc_ekf/filter/prior_sensitivity.h"
+#include "pc_ekf/sensitivity/prior_sensitivity.h"
 #include "pc_ekf/filter/uncertain_parameters.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/mechanical_model.h"

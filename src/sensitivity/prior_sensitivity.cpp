@@ -1,4 +1,4 @@
-#include "pc_ekf/filter/prior_sensitivity.h"
+#include "pc_ekf/sensitivity/prior_sensitivity.h"
 
 #include <algorithm>
 #include <cstdio>
