@@ -64,7 +64,7 @@ struct FullCarFields {
   T added_mass_y{};  // left of the right wheels' line, m
   T imu_x{}, imu_y{};  // IMU mount relative to O, m
   // Heights above the mount plane (the pitch and roll axes) and the anti-roll
-  // bars (docs/models.md): all 0 is the 7-DOF ride model of MODELS.md §2.
+  // bars (docs/models.md): all 0 is the 7-DOF ride model without heights.
   T body_cg_height{};     // h_b: O above O', the point of the mount plane below it
   T added_mass_height{};  // h_M
   T mount_height{};       // h_P, the mount plane above the ground

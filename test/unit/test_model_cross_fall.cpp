@@ -51,7 +51,7 @@ TEST(CrossFall, TiltsTheImuByItsClosedForm) {
   // (g + a) sin(phi) and accel_z = (g + a) cos(phi) - a_y phi, at rest (g + a
   // = g, the rest zeros g sin(phi_s), g cos(phi_s) taken off):
   // accel_y = g sin(beta) cos(phi_s), accel_z = -g sin(beta) phi_s, with
-  // phi_s the loaded static roll (+14.4 mrad, SENSORS.md §3).
+  // phi_s the loaded static roll (+14.4 mrad, left side up).
   const double phi_s = -y(1, 1) / (g * std::sin(0.02));
   EXPECT_NEAR(phi_s, 0.0144, 0.001);
   for (int q = 1; q <= 2; ++q) {
