@@ -56,12 +56,25 @@ OneStepRun::OneStepRun(const EstimatorConfig& c,
        i < model->channelNames().size() && model->channelModelled(static_cast<int>(i)); ++i) {
     r->loo_channels.push_back(model->channelNames()[i]);
   }
-  if (sink_) sink_->begin(columnsOf(c, r->loo_channels));
+  r->load_transfer_ratio = model->hasLoadTransferRatio();
+  if (r->load_transfer_ratio) model_ = model;
+  SampleColumns columns = columnsOf(c, r->loo_channels);
+  columns.load_transfer_ratio = r->load_transfer_ratio;
+  if (sink_) sink_->begin(columns);
+}
+
+SampleRecord OneStepRun::record() const {
+  SampleRecord s = recordOf(last_);
+  if (model_ && last_.mean.size() > 0 && last_.mean.allFinite()) {
+    const Eigen::VectorXd full = prop_->mapping().fullParameters(last_.mean);
+    s.load_transfer_ratio = model_->loadTransferRatio(full, last_.time);
+  }
+  return s;
 }
 
 void OneStepRun::process(const Measurement& m) {
   last_ = filter_.process(m);
-  if (sink_) sink_->add(recordOf(last_));
+  if (sink_) sink_->add(record());
   r_->nis_window_violations += last_.health.nis_window_outside;
   nested_ += last_.health.band_nested;
   forecast_problems_ += last_.forecast.invalid_points + last_.forecast.nonfinite_points > 0;
@@ -95,7 +108,7 @@ void OneStepRun::finish(std::size_t samples, const std::optional<StepResult>& de
   r->clock_offset = last_.clock_offset;
   r->clock_offset_std = last_.clock_offset_std;
   r->nuisance = last_.nuisance;
-  r->last_record = recordOf(last_);
+  r->last_record = record();
   r->band_nested_fraction = samples == 0 ? 1.0 : double(nested_) / samples;
   summarise(c_, last_.mean, last_.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler_, last_.coefficients);

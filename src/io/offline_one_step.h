@@ -32,6 +32,9 @@ class OneStepRun {
   void finish(std::size_t samples, const std::optional<StepResult>& decimated);
 
  private:
+  // last_'s record, with the load transfer ratio at its mean (model_).
+  SampleRecord record() const;
+
   const EstimatorConfig& c_;
   SampleSink* sink_;
   OfflineResult* r_;
@@ -42,6 +45,8 @@ class OneStepRun {
   StepResult last_;
   int nested_ = 0, forecast_problems_ = 0;
   bool nonfinite_ = false;
+  // The model, when it gives the load transfer ratio; null otherwise.
+  std::shared_ptr<const MechanicalModel> model_;
 };
 
 // The multi-rate coherence check (docs/method.md §5.2): the same filter on

@@ -91,6 +91,8 @@ std::string toJson(const OfflineResult& r) {
                               {"coefficients", numberList(d.coefficients)}});
     }
   }
+  // Models that give it: the last sample's load transfer ratio (null: NaN).
+  if (r.load_transfer_ratio) j["load_transfer_ratio"] = r.last_record.load_transfer_ratio;
   j["coherence"] = {{"available", r.coherence.available},
                     {"decimation", r.coherence.decimation},
                     {"disagreement", numberList(r.coherence.disagreement)},
@@ -197,6 +199,7 @@ void OfflineOutputs::finish(const OfflineResult& r) {
   SampleColumns columns;
   for (const ParameterSummary& p : r.parameters) columns.parameters.push_back(p.name);
   columns.loo_channels = r.loo_channels;
+  columns.load_transfer_ratio = r.load_transfer_ratio;
   samples_->close(columns);
 
   std::string text = "parameter,bin_low,bin_high,density\n";

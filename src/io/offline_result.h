@@ -26,12 +26,16 @@ struct SampleRecord {
   bool band_nested = true;
   bool healthy = true;
   Eigen::VectorXd loo_error;  // one-step: per channel (ForecastReport::loo_error)
+  // One-step with a model that gives it (MechanicalModel::hasLoadTransferRatio):
+  // the load transfer ratio at this sample, at the posterior mean; NaN otherwise.
+  double load_transfer_ratio = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The per-sample rows' columns besides the records' own: the parameters'
 // names and the leave-one-out channels (one-step; SampleRecord::loo_error).
 struct SampleColumns {
   std::vector<std::string> parameters, loo_channels;
+  bool load_transfer_ratio = false;  // a last column load_transfer_ratio
 };
 
 // Takes the run's per-sample records as they are made (estimate_offline
@@ -87,6 +91,9 @@ struct OfflineResult {
   // Final derived quantities (cg_height...: vehicles with heights and a PC
   // expansion only; empty otherwise).
   std::vector<DerivedSummary> derived;
+  // The model gives the load transfer ratio (last_record.load_transfer_ratio,
+  // samples.csv's last column).
+  bool load_transfer_ratio = false;
   CoherenceCheck coherence;
   int nis_window_violations = 0;
   PredictiveCheck predictive;   // batch methods, grid and EnKF (health.predictive_check)

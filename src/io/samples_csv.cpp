@@ -10,7 +10,7 @@ namespace {
 
 // One row (appendG17: the stream's %.17g digits).
 void appendSampleRow(std::string& text, const SampleRecord& s, std::size_t loo_channels,
-                     int terms) {
+                     int terms, bool load_transfer_ratio) {
   text += std::to_string(s.index);
   text += ',';
   appendG17(text, s.time);
@@ -33,6 +33,10 @@ void appendSampleRow(std::string& text, const SampleRecord& s, std::size_t loo_c
     if (static_cast<std::size_t>(s.loo_error.size()) == loo_channels) {
       appendG17(text, s.loo_error[i]);
     }
+  }
+  if (load_transfer_ratio) {
+    text += ',';
+    appendG17(text, s.load_transfer_ratio);
   }
   text += '\n';
 }
@@ -99,7 +103,8 @@ void SamplesCsv::write(const Block& block) {
   if (!header_) writeHeader(static_cast<int>(block.front().coefficients.cols()));
   text_.clear();
   for (const SampleRecord& r : block) {
-    appendSampleRow(text_, r, columns_.loo_channels.size(), terms_);
+    appendSampleRow(text_, r, columns_.loo_channels.size(), terms_,
+                    columns_.load_transfer_ratio);
   }
   out_.write(text_.data(), static_cast<std::streamsize>(text_.size()));
   if (!out_) {
@@ -119,6 +124,7 @@ void SamplesCsv::writeHeader(int terms) {
   }
   text += ",nis,nis_window_outside,band_nested,healthy";
   for (const std::string& channel : columns_.loo_channels) text += ",loo_" + channel;
+  if (columns_.load_transfer_ratio) text += ",load_transfer_ratio";
   text += '\n';
   out_.write(text.data(), static_cast<std::streamsize>(text.size()));
   terms_ = terms;

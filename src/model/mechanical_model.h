@@ -5,6 +5,7 @@
 
 #include <Eigen/Dense>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <string>
 #include <vector>
@@ -157,6 +158,16 @@ class MechanicalModel {
   // The road the model rides on (nullptr for a model without one), so that a
   // variant of the model (another vehicle) can be built on the same road.
   virtual const ContactRoad* contactRoad() const { return nullptr; }
+
+  // The load transfer ratio (F_right - F_left) / (F_right + F_left) of the
+  // tyre loads at time t (a sample's) for the vehicle `params` (one full
+  // parameter vector, e.g. the posterior mean), from the readings at t
+  // (docs/models.md, "Rollover outputs"). Models that give it say so with
+  // hasLoadTransferRatio(); the default: NaN.
+  virtual bool hasLoadTransferRatio() const { return false; }
+  virtual double loadTransferRatio(const Eigen::VectorXd& /*params*/, double /*t*/) const {
+    return std::numeric_limits<double>::quiet_NaN();
+  }
 
   int parameterIndex(const std::string& name) const;  // -1 when unknown
 };

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "pc_ekf/model/input_noise.h"
@@ -45,14 +46,10 @@ double lateralOf(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, 
   return a;
 }
 
-// phi'' and g + a at the IMU for inputs `in` and the roll since rest `roll`.
-// With heights, bar or a_y (docs/models.md): the bar's force k_a (x1 - x2)
-// on the left end (x the compressions), minus it on the right, and
-// J phi'' = cos(phi) (D F_1 - (L - D) F_2) + S (a_y cos(phi) + (g + a_P) sin(phi))
-// with the total forces F_i (their static part carries the S g tan(phi_s)).
-double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Point& p,
-                        const double* in, double roll, double* specific) {
-  double f[2], x[2];
+// The spring's compression x_i and the spring minus damper force f_i of
+// each side for inputs `in`.
+inline void springDamperForces(const RoadFreeConstants& c, const RoadFreeConstants::Point& p,
+                               const double* in, double* x, double* f) {
   for (int i = 0; i < 2; ++i) {
     x[i] = p.delta_ref[i] - in[kU1 + i];  // spring compression
     const double v = in[kV1 + i];
@@ -62,6 +59,17 @@ double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Poi
                                      : damperForce<DamperLaw::kLinear>(p.damping[i], c.tanh_rate, v);
     f[i] = p.k[i] * x[i] + p.k3[i] * x[i] * x[i] * x[i] - damper;
   }
+}
+
+// phi'' and g + a at the IMU for inputs `in` and the roll since rest `roll`.
+// With heights, bar or a_y (docs/models.md): the bar's force k_a (x1 - x2)
+// on the left end (x the compressions), minus it on the right, and
+// J phi'' = cos(phi) (D F_1 - (L - D) F_2) + S (a_y cos(phi) + (g + a_P) sin(phi))
+// with the total forces F_i (their static part carries the S g tan(phi_s)).
+double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Point& p,
+                        const double* in, double roll, double* specific) {
+  double f[2], x[2];
+  springDamperForces(c, p, in, x, f);
   if (!c.elevated) {
     const double theta_dd =
         std::cos(p.roll_static + roll) * (p.rear_arm * f[1] - p.cg * f[0]) * p.inv_inertia;
@@ -302,6 +310,37 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
     c->points.push_back(a);
   }
   return c;
+}
+
+double RollPlaneRoadFreeModel::loadTransferRatio(const Eigen::VectorXd& params, double t) const {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  if (params.size() != nominal_vector_.size() || !params.allFinite()) return nan;
+  std::unique_ptr<RoadFreeConstants> c;
+  try {
+    c = constants(Eigen::MatrixXd(params));
+  } catch (const std::exception&) {
+    return nan;  // not admissible, or no static equilibrium
+  }
+  const RoadFreeConstants::Point& p = c->points.front();
+  double in[kMaxInputs] = {}, x[2], f[2];
+  inputs_->at(t, in);
+  springDamperForces(*c, p, in, x, f);
+  const double twist = p.bar * (x[0] - x[1]);
+  const RollPlaneFields<int>& at = rollPlaneRows();
+  double left = f[0] + twist + params[at.unsprung_mass[0]] * p.gravity;
+  double right = f[1] - twist + params[at.unsprung_mass[1]] * p.gravity;
+  // a_y's share that bypasses the springs: the body and load's lateral force
+  // at the mount plane and the unsprung masses' at the wheel centres.
+  const double a_y = c->speed < 0 ? 0.0 : lateralOf(*c, p, in);
+  if (a_y != 0.0) {
+    const double lever = (params[at.bar_mass] + params[at.added_mass]) * params[at.mount_height] +
+                         (params[at.unsprung_mass[0]] + params[at.unsprung_mass[1]]) *
+                             params[at.wheel_radius];
+    const double shift = a_y * lever / params[at.bar_length];
+    left -= shift;
+    right += shift;
+  }
+  return (right - left) / (right + left);
 }
 
 std::unique_ptr<ModelBatch> RollPlaneRoadFreeModel::prepare(const Eigen::MatrixXd& params) const {

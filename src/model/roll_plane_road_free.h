@@ -69,6 +69,18 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
                                      double mean_accel_z) const override;
   const ReadingInputs& inputs() const { return *inputs_; }
 
+  // Tyre loads from the readings at t: on each side the suspension's force
+  // (the spring at the compression delta_ref - u_i, its static part the
+  // side's weight share at the static equilibrium of `params`, minus the
+  // damper's force at v_i, plus the anti-roll bar's k_a (x_1 - x_2)), plus
+  // the side's unsprung weight m_u,i g; side 1 (the left end) is the left.
+  // With a_y read (speed x gyro_z), the lateral forces that reach the tyres
+  // without the springs move a_y ((m + M) h_P + sum m_u r_w) / L from the
+  // left tyre to the right (a_y > 0: a left turn).
+  // NaN when `params` is not admissible or the equilibrium fails.
+  bool hasLoadTransferRatio() const override { return true; }
+  double loadTransferRatio(const Eigen::VectorXd& params, double t) const override;
+
  private:
   std::unique_ptr<RoadFreeConstants> constants(const Eigen::MatrixXd& params) const;
 

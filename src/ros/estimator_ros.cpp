@@ -105,7 +105,8 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
   if (pdfs_) {
     pdf_worker_ = std::make_unique<PdfWorker>(
         pdfs_, prior_propagator_->mapping().names(),
-        [pub = pdf_pub_](const ParameterPdf& msg) mutable { pub.publish(msg); });
+        [pub = pdf_pub_](const ParameterPdf& msg) mutable { pub.publish(msg); },
+        derivedPdfSampler(config_, prior_propagator_->mapping(), prior_propagator_->basis(), pdfs_));
   }
   // joint_states on the receiver thread's own queue (onJointStateReceived).
   ros::SubscribeOptions joint_options;

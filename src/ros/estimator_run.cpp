@@ -110,6 +110,12 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   }
 
   out.estimate = message(r, stamp);
+  // The tyres' load transfer at this sample, at the posterior mean (models that give it).
+  const MechanicalModel& model = propagator_->model();
+  if (model.hasLoadTransferRatio() && r.mean.size() > 0 && r.mean.allFinite()) {
+    out.estimate.load_transfer_ratio =
+        model.loadTransferRatio(propagator_->mapping().fullParameters(r.mean), r.time);
+  }
   if (disagreement_) {
     setCoherence(out.estimate, *disagreement_, k, config_.health.coherence_threshold);
   }
@@ -131,7 +137,11 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   }
 
   if (pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite()) {
-    out.pdf = PdfRequest{r.coefficients, static_cast<std::uint32_t>(r.index), stamp};
+    out.pdf = PdfRequest{r.coefficients, static_cast<std::uint32_t>(r.index), stamp, {}, {}};
+    if (!out.estimate.derived_names.empty()) {  // the rollover outputs' PDFs after them
+      out.pdf->derived_names = out.estimate.derived_names;
+      out.pdf->derived = derivedCoefficientsOf(out.estimate);
+    }
   }
   return out;
 }
@@ -248,6 +258,7 @@ BatchEstimate EstimatorRun::batch(bool road_complete) const {
     return out;
   }
   ParameterEstimate& msg = out.estimate;
+  msg.load_transfer_ratio = std::numeric_limits<double>::quiet_NaN();  // per sample only
   msg.header.stamp = batch_last_stamp_;
   msg.sample_index = static_cast<std::uint32_t>(batch_series_.size());
   msg.time = batch_series_.back().time;

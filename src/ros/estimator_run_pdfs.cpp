@@ -1,18 +1,42 @@
 #include "pc_ekf/ros/estimator_run_pdfs.h"
 
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
 
 ParameterPdf parameterPdf(const ParameterPdfSampler& sampler, const std::vector<std::string>& names,
-                          const PdfRequest& r) {
-  return pdfMessage(names, sampler.histograms(r.coefficients), {}, r.sample_index, r.stamp);
+                          const PdfRequest& r, const ParameterPdfSampler* derived_sampler) {
+  if (!derived_sampler || r.derived_names.empty() ||
+      r.derived.rows() != static_cast<Eigen::Index>(r.derived_names.size()) ||
+      !r.derived.allFinite()) {
+    return pdfMessage(names, sampler.histograms(r.coefficients), {}, r.sample_index, r.stamp);
+  }
+  // The derived quantities after the parameters (readers of the parameters alone unchanged).
+  std::vector<std::string> all = names;
+  all.insert(all.end(), r.derived_names.begin(), r.derived_names.end());
+  std::vector<Histogram> h = sampler.histograms(r.coefficients);
+  const std::vector<Histogram> d = derived_sampler->histograms(r.derived);
+  h.insert(h.end(), d.begin(), d.end());
+  return pdfMessage(all, h, {}, r.sample_index, r.stamp);
+}
+
+std::shared_ptr<const ParameterPdfSampler> derivedPdfSampler(
+    const EstimatorConfig& c, const ParameterMapping& mapping, const PolynomialBasis& basis,
+    std::shared_ptr<const ParameterPdfSampler> parameters) {
+  if (!hasRolloverQuantities(mapping)) return nullptr;
+  if (c.pdf.shared_draws) return parameters;
+  return std::make_shared<const ParameterPdfSampler>(basis, c.pdf.draws, c.pdf.bins, c.pdf.seed);
 }
 
 PdfWorker::PdfWorker(std::shared_ptr<const ParameterPdfSampler> sampler,
                      std::vector<std::string> names,
-                     std::function<void(const ParameterPdf&)> publish)
-    : sampler_(std::move(sampler)), names_(std::move(names)), publish_(std::move(publish)) {
+                     std::function<void(const ParameterPdf&)> publish,
+                     std::shared_ptr<const ParameterPdfSampler> derived_sampler)
+    : sampler_(std::move(sampler)),
+      derived_sampler_(std::move(derived_sampler)),
+      names_(std::move(names)),
+      publish_(std::move(publish)) {
   thread_ = std::thread([this] { run(); });
 }
 
@@ -58,7 +82,7 @@ void PdfWorker::run() {
     queue_.pop_front();
     busy_ = true;
     lock.unlock();
-    const ParameterPdf msg = parameterPdf(*sampler_, names_, r);
+    const ParameterPdf msg = parameterPdf(*sampler_, names_, r, derived_sampler_.get());
     publish_(msg);  // ros::Publisher::publish is thread-safe
     lock.lock();
     busy_ = false;

@@ -20,6 +20,8 @@
 #include <thread>
 #include <vector>
 
+#include "pc_ekf/filter/uncertain_parameters.h"
+#include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/pdf_sampler.h"
 
 namespace pc_ekf {
@@ -28,16 +30,34 @@ struct PdfRequest {
   Eigen::MatrixXd coefficients;  // parameters x S
   std::uint32_t sample_index = 0;
   ros::Time stamp;
+  // The derived quantities (the rollover outputs, vehicles with heights):
+  // their names and expansions (names x S); empty: none.
+  std::vector<std::string> derived_names;
+  Eigen::MatrixXd derived;
 };
 
-// The parameter_pdf message of one sample.
+// The parameter_pdf message of one sample: the parameters' histograms, then
+// the derived quantities' (when the request has them and `derived_sampler`
+// is given) after them, by `derived_sampler`'s draws (the parameters' own
+// when they share them, pdf.shared_draws; else draws with pdf.seed, as
+// estimate_offline's pdfs.csv).
 ParameterPdf parameterPdf(const ParameterPdfSampler& sampler, const std::vector<std::string>& names,
-                          const PdfRequest& r);
+                          const PdfRequest& r,
+                          const ParameterPdfSampler* derived_sampler = nullptr);
+
+// The sampler of the derived quantities' PDFs: `parameters` itself when the
+// draws are shared, else one with the first seed; null when the vehicle has
+// no rollover outputs.
+std::shared_ptr<const ParameterPdfSampler> derivedPdfSampler(
+    const EstimatorConfig& c, const ParameterMapping& mapping, const PolynomialBasis& basis,
+    std::shared_ptr<const ParameterPdfSampler> parameters);
 
 class PdfWorker {
  public:
+  // `derived_sampler` (null: no derived quantities' PDFs): derivedPdfSampler's.
   PdfWorker(std::shared_ptr<const ParameterPdfSampler> sampler, std::vector<std::string> names,
-            std::function<void(const ParameterPdf&)> publish);
+            std::function<void(const ParameterPdf&)> publish,
+            std::shared_ptr<const ParameterPdfSampler> derived_sampler = nullptr);
   // Drops what is still queued (shutdown), waits for the message in hand.
   ~PdfWorker();
   void submit(PdfRequest r);
@@ -49,7 +69,7 @@ class PdfWorker {
  private:
   void run();
 
-  std::shared_ptr<const ParameterPdfSampler> sampler_;
+  std::shared_ptr<const ParameterPdfSampler> sampler_, derived_sampler_;
   std::vector<std::string> names_;
   std::function<void(const ParameterPdf&)> publish_;
   mutable std::mutex mutex_;

@@ -398,6 +398,7 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
                                   const HealthSettings& health_settings,
                                   const EstimateContext& context) {
   ParameterEstimate msg;
+  msg.load_transfer_ratio = std::numeric_limits<double>::quiet_NaN();  // set by the caller
   msg.header.stamp = context.stamp;
   msg.header.frame_id = context.frame_id;
   msg.sample_index = static_cast<std::uint32_t>(std::max(0, result.index));
@@ -453,6 +454,7 @@ ParameterEstimate groundTruthMessage(const ParameterMapping& mapping,
                                 " germ values for " + std::to_string(n) + " parameters");
   }
   ParameterEstimate msg;
+  msg.load_transfer_ratio = std::numeric_limits<double>::quiet_NaN();  // set by the caller
   msg.header.stamp = stamp;
   msg.sample_index = 0;
   msg.time = 0.0;

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/ros/estimator_run_pdfs.h"
 #include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
@@ -335,6 +336,54 @@ TEST(EstimateMessage, RolloverOutputsWithHeightsOnly) {
   EXPECT_EQ(derivedCoefficientsOf(msg).size(), 0);
   msg.derived_names = {"cg_height"};  // a malformed message
   EXPECT_THROW(derivedCoefficientsOf(msg), std::invalid_argument);
+}
+
+// parameter_pdf: the rollover outputs' PDFs after the parameters' (names,
+// bins, values: pcHistogram with pdf.seed, as estimate_offline's pdfs.csv),
+// for shared and independent draws; none without heights.
+TEST(PdfMessage, DerivedQuantitiesAfterTheParameters) {
+  for (const bool shared : {true, false}) {
+    EstimatorConfig turns =
+        loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/turns.yaml");
+    turns.pdf.shared_draws = shared;
+    turns.pdf.draws = 2000;
+    const auto model = makeModel(turns, makeRoad(turns));
+    const ParameterMapping mapping(*model, turns.uncertain);
+    const PolynomialBasis basis(mapping.germs(), 2);
+    const Eigen::MatrixXd coefficients = mapping.priorCoefficients(basis);
+    const auto sampler = makePdfSampler(turns, basis, mapping.count());
+    const auto derived = derivedPdfSampler(turns, mapping, basis, sampler);
+    ASSERT_TRUE(derived);
+    EXPECT_EQ(derived == sampler, shared);
+    ParameterEstimate estimate;
+    setCoefficients(estimate, coefficients);
+    setRolloverOutputs(estimate, mapping, basis, coefficients);
+    PdfRequest r{coefficients, 5, ros::Time(1.0), estimate.derived_names,
+                 derivedCoefficientsOf(estimate)};
+    const ParameterPdf with = parameterPdf(*sampler, mapping.names(), r, derived.get());
+    const ParameterPdf without = parameterPdf(*sampler, mapping.names(), r);
+    const std::size_t n = mapping.names().size();
+    ASSERT_EQ(with.names.size(), n + 3);
+    EXPECT_EQ(std::vector<std::string>(with.names.begin(), with.names.begin() + n), mapping.names());
+    EXPECT_EQ(with.names.back(), "rollover_threshold");
+    // The parameters' part is the message without them, bit for bit.
+    EXPECT_EQ(std::vector<double>(with.densities.begin(),
+                                  with.densities.begin() + without.densities.size()),
+              without.densities);
+    const Histogram h = pcHistogram(basis, r.derived.row(0).transpose(), turns.pdf.draws,
+                                    turns.pdf.bins, turns.pdf.seed);
+    const std::size_t at = without.densities.size();
+    for (Eigen::Index b = 0; b < h.densities.size(); ++b) {
+      EXPECT_EQ(with.densities[at + static_cast<std::size_t>(b)], h.densities[b]);
+    }
+  }
+  const EstimatorConfig paper =
+      loadConfigFile(std::string(PC_EKF_SOURCE_DIR) + "/config/speed_bump.yaml");
+  const auto paper_model = makeModel(paper, makeRoad(paper));
+  const ParameterMapping paper_mapping(*paper_model, paper.uncertain);
+  const PolynomialBasis paper_basis(paper_mapping.germs(), 2);
+  EXPECT_FALSE(derivedPdfSampler(paper, paper_mapping, paper_basis,
+                                 makePdfSampler(paper, paper_basis, paper_mapping.count())));
 }
 
 TEST(PdfMessage, ConcatenatesHistogramsWithBinCounts) {
