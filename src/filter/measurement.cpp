@@ -81,6 +81,13 @@ Eigen::VectorXd NoiseModel::stackedVariances(const std::vector<Measurement>& ser
   return out;
 }
 
+Eigen::MatrixXd inputSlopesCovariance(const Eigen::MatrixXd& slopes, const Eigen::VectorXd& rho) {
+  const Eigen::Index n = rho.size();
+  const Eigen::MatrixXd now = slopes.leftCols(n), before = slopes.rightCols(n);
+  const Eigen::MatrixXd cross = now * rho.asDiagonal() * before.transpose();
+  return now * now.transpose() + before * before.transpose() + cross + cross.transpose();
+}
+
 Measurement onlyChannels(const Measurement& m, const std::vector<int>& keep) {
   Measurement kept;
   kept.time = m.time;
@@ -93,6 +100,10 @@ Measurement onlyChannels(const Measurement& m, const std::vector<int>& keep) {
   kept.values = m.values(rows);
   if (m.variances.size() != 0) kept.variances = m.variances(rows);
   if (m.extra_covariance.size() != 0) kept.extra_covariance = m.extra_covariance(rows, rows);
+  if (m.input_slopes.size() != 0) {
+    kept.input_slopes = m.input_slopes(rows, Eigen::all);
+    kept.input_correlation = m.input_correlation;
+  }
   return kept;
 }
 

@@ -20,7 +20,22 @@ struct Measurement {
   // the noise of readings used as inputs (road-free, errors in variables).
   // Off its diagonal it correlates this sample's readings (NoiseWhitening).
   Eigen::MatrixXd extra_covariance{};
+  // Optional (values x 2 inputs), for an estimator that carries the inputs'
+  // noise as states of its own (filter.horizon.input_noise: state): each
+  // input's change of the readings by its noise at this sample (the first
+  // half of the columns) and at the one before (the second), the derivative
+  // times that noise's std; extra_covariance includes them all. The
+  // standardised noise of input i at this sample correlates with that at the
+  // one before by input_correlation[i].
+  Eigen::MatrixXd input_slopes{};
+  Eigen::VectorXd input_correlation{};
 };
+
+// What input slopes s and correlations rho add to a sample's R (the noise
+// of each input at the sample and at the one before, standardised, with
+// correlation rho_i between them): sum_i a_i a_i' + b_i b_i' + rho_i (a_i b_i'
+// + b_i a_i'), a_i and b_i the columns i and inputs + i of s.
+Eigen::MatrixXd inputSlopesCovariance(const Eigen::MatrixXd& slopes, const Eigen::VectorXd& rho);
 
 using MeasurementSeries = std::vector<Measurement>;
 

@@ -114,6 +114,9 @@ void MovingHorizon::reset() {
     bias_z_ = n++;
   }
   if (angle_ && settings_.gyro_bias > 0.0) bias_g_ = n++;
+  input_count_ = settings_.input_noise_states ? propagator_.model().inputCount() : 0;
+  inputs_first_ = input_count_ > 0 ? n : -1;
+  n += 2 * input_count_;  // standardised: prior N(0, 1)
   mean_ = Eigen::VectorXd::Zero(n);
   cov_ = Eigen::MatrixXd::Identity(n, n);
   if (angle_) cov_(last(), last()) = 0.0;  // at rest at t = 0: no angle integrated yet
@@ -142,6 +145,22 @@ void MovingHorizon::walk(Eigen::MatrixXd& cov, double dt) const {
     cov(cross_, cross_) += q;
     cov(last(), cross_) += q;
     cov(cross_, last()) += q;
+  }
+}
+
+void MovingHorizon::advanceInputs(const Measurement& m, Eigen::VectorXd& mean,
+                                  Eigen::MatrixXd& cov) const {
+  if (input_count_ == 0) return;
+  for (int i = 0; i < input_count_; ++i) {
+    const int now = inputs_first_ + i, before = now + input_count_;
+    const double rho = carriesInputs(m) ? m.input_correlation[i] : 0.0;
+    mean[before] = mean[now];
+    mean[now] *= rho;
+    cov.row(before) = cov.row(now);
+    cov.col(before) = cov.col(now);
+    cov.row(now) *= rho;
+    cov.col(now) *= rho;
+    cov(now, now) += 1.0 - rho * rho;
   }
 }
 
@@ -283,7 +302,19 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
     // Beyond the bound the prediction was taken at it.
     *z0 += jacobian->col(offset_) * (at[offset_] - shift / settings_.clock_offset);
   }
-  const NoiseWhitening white(noise, m);
+  Measurement left;  // m's R without what the input states carry
+  const bool inputs = carriesInputs(m);
+  if (inputs) {
+    for (int i = 0; i < 2 * input_count_; ++i) jacobian->col(inputs_first_ + i) = -m.input_slopes.col(i);
+    *z0 += jacobian->middleCols(inputs_first_, 2 * input_count_) *
+           at.segment(inputs_first_, 2 * input_count_);
+    left.time = m.time;
+    left.channels = m.channels;
+    left.values = m.values;
+    left.variances = m.variances;
+    left.extra_covariance = m.extra_covariance - inputSlopesCovariance(m.input_slopes, m.input_correlation);
+  }
+  const NoiseWhitening white(noise, inputs ? left : m);
   *values = m.values;
   white.whiten(*values);
   white.whiten(*z0);
@@ -327,6 +358,7 @@ HorizonStep MovingHorizon::propose(const Measurement& m, const NoiseModel& noise
   noise_ = &noise;
   HorizonStep s;
   walk(cov_, m.time - previous_time_);
+  advanceInputs(m, mean_, cov_);
   *mean = mean_;
   *cov = cov_;
   if (m.channels.empty()) return s;
@@ -394,6 +426,7 @@ void MovingHorizon::endWindow(HorizonStep& s) {
     bool ok = true;
     for (Kept& k : kept_) {
       walk(cov, k.dt);
+      advanceInputs(k.m, mean, cov);
       if (!k.used) continue;
       Eigen::VectorXd values, z0, r;
       Eigen::MatrixXd j;

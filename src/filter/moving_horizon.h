@@ -17,6 +17,11 @@
 // error e (rad, variance growing by (sigma_gyro dt)^2 a sample), that
 // accel_y and accel_z see through their slope in the angle; the readings'
 // inherited noise then leaves it out (ReadingInputs::integralInState).
+//
+// settings.input_noise_states: the inputs' noise as states too, each
+// input's (standardised) at this sample and at the one before, advanced by
+// the sample's lag-1 correlation (Measurement::input_slopes); the sample's
+// R keeps only what is not carried.
 #pragma once
 
 #include <Eigen/Dense>
@@ -201,6 +206,16 @@ class MovingHorizon {
   // offset's prior std.
   double differenceStep(double dt) const;
   void walk(Eigen::MatrixXd& cov, double dt) const;  // the last sample's (window re-runs)
+  // The inputs' noise states from the sample before to m's: the one before
+  // takes this one's, this one rho times itself plus fresh noise.
+  void advanceInputs(const Measurement& m, Eigen::VectorXd& mean, Eigen::MatrixXd& cov) const;
+  // m's slopes in the input states, when it carries them (else false).
+  bool carriesInputs(const Measurement& m) const {
+    return input_count_ > 0 && m.input_slopes.cols() == 2 * input_count_ &&
+           m.input_correlation.size() == input_count_;
+  }
+  int inputs_first_ = -1;  // the first input noise state's row (now), then input_count_ before
+  int input_count_ = 0;
   MovingHorizonSettings settings_;
   Eigen::VectorXd prior_mean_, prior_std_, lower_, upper_;
   Eigen::VectorXd mean_;  // zeta

@@ -83,6 +83,12 @@ struct MovingHorizonSettings {
   double cross_fall_walk = 0.0;
   double accel_bias = 0.0;
   double gyro_bias = 0.0;
+  // The inputs' noise (road-free: the suspension readings the model reads)
+  // carried as states, each input's at this sample and at the one before,
+  // instead of each sample's inherited covariance alone: the noise of
+  // a low-passed or averaged input is shared by the samples that follow
+  // (Measurement::input_slopes).
+  bool input_noise_states = false;
   bool nuisance() const {
     return cross_fall > 0.0 || cross_fall_walk > 0.0 || accel_bias > 0.0 || gyro_bias > 0.0;
   }

@@ -289,6 +289,23 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   for (double d : drift) {
     if (!(d >= 0.0) || !std::isfinite(d)) f.fail("drift", std::to_string(d), "intensities >= 0");
   }
+  // The same as fractions of each parameter's nominal (a vehicle_file's
+  // values scale them), added in quadrature.
+  std::vector<double> relative;
+  f.numberList("drift_relative", relative, 0, n);
+  if (!relative.empty() && relative.size() != n && relative.size() != loads) {
+    f.fail("drift_relative", "a list of " + std::to_string(relative.size()),
+           "one fraction per uncertain parameter (" + std::to_string(loads) +
+               (n != loads ? ", or " + std::to_string(n) + " with the tolerances" : std::string()) +
+               ")");
+  }
+  for (std::size_t i = 0; i < relative.size(); ++i) {
+    const double r = relative[i];
+    if (!(r >= 0.0) || !std::isfinite(r)) f.fail("drift_relative", std::to_string(r), "fractions >= 0");
+    if (r == 0.0) continue;
+    drift.resize(n, 0.0);
+    drift[i] = std::hypot(drift[i], r * std::abs(c.uncertain[i].nominal));
+  }
   s.drift = Eigen::Map<const Eigen::VectorXd>(drift.data(), static_cast<Eigen::Index>(drift.size()));
   YamlMapReader r = f.map("reopen");
   std::string mode = toString(s.reopen.mode);
@@ -317,6 +334,12 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   w.number("cross_fall_walk", s.horizon.cross_fall_walk, 0.0, 1.0);
   w.number("accel_bias", s.horizon.accel_bias, 0.0, 10.0);
   w.number("gyro_bias", s.horizon.gyro_bias, 0.0, 1.0);
+  std::string input_noise = s.horizon.input_noise_states ? "state" : "sample";
+  w.text("input_noise", input_noise);
+  if (input_noise != "state" && input_noise != "sample") {
+    w.fail("input_noise", "'" + input_noise + "'", "sample or state");
+  }
+  s.horizon.input_noise_states = input_noise == "state";
   w.finish();
   s.horizon.window = linearization == "mean" ? window : 0.0;
   if (s.reopen.mode == ReopenMode::kLoad && linearization != "mean") {

@@ -108,10 +108,17 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
   }
   observe_interval_ = !(interval > 0.0) && !blends_.empty();
   accel_z_ = type.description().channelIndex("accel_z");
+  if (c.safeguards.horizon.window > 0.0 && c.safeguards.horizon.input_noise_states) {
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+      if (std::find(outputs_.begin(), outputs_.end(), input_channels_[i]) == outputs_.end()) {
+        state_inputs_.push_back(static_cast<int>(i));
+      }
+    }
+  }
 }
 
 void RoadFreeStream::blendNoiseAt(double dt) {
-  for (const Blend& b : blends_) {
+  for (Blend& b : blends_) {
     // The blended travel's noise at the sample interval dt, a = tau / (tau + dt):
     // the travel's, low-passed, (1 - a) / (1 + a) of its variance; the rate's
     // trapezoid increments (variance dt^2 sigma_v^2 / 2), high-passed,
@@ -124,7 +131,8 @@ void RoadFreeStream::blendNoiseAt(double dt) {
     // Its noise is low-passed, so consecutive samples share it: lag-1
     // correlation a, plus the rate's trapezoid that both samples hold.
     const double shared = 0.25 * a * a * dt * dt * absolute_[b.v] * absolute_[b.v];
-    inputs_->setNoiseCorrelation(b.u, std::min(0.999, a + shared / (absolute_[b.u] * absolute_[b.u])));
+    b.rho = std::min(0.999, a + shared / (absolute_[b.u] * absolute_[b.u]));
+    inputs_->setNoiseCorrelation(b.u, b.rho);
   }
 }
 
@@ -192,16 +200,58 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
   const auto k = static_cast<std::size_t>(samples_ - 1);
-  if (still.standing) {
+  if (!state_inputs_.empty()) {
+    inputSlopes(k, still, &o);
+  } else if (still.standing) {
     if (!travels_at_) updateInputNoise();
     const Eigen::MatrixXd standing =
-        travels_at_(k) / static_cast<double>(still.averaged) + others_at_(k);
+        travels_at_(k, nullptr) / static_cast<double>(still.averaged) + others_at_(k, nullptr);
     o.extra_covariance = standing(o.channels, o.channels);
   } else {
-    o.extra_covariance = inherited_at_(k)(o.channels, o.channels);
+    o.extra_covariance = inherited_at_(k, nullptr)(o.channels, o.channels);
   }
   *out = std::move(o);
   return "";
+}
+
+void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o) {
+  // Each input's noise at this sample against that at the one before: a
+  // stop's travel is the mean of the readings since it began, N of them,
+  // whose mean over N - 1 it shares by sqrt((N - 1) / N); a blended travel's
+  // is low-passed (its blend's rho); a stop's start or end, or anything
+  // else, independent. The inherited covariance takes the same.
+  const Eigen::Index n = static_cast<Eigen::Index>(input_channels_.size());
+  Eigen::VectorXd rho = Eigen::VectorXd::Zero(n);
+  for (int i : travel_inputs_) {
+    if (still.standing && was_standing_ && still.averaged > 1) {
+      const double count = static_cast<double>(still.averaged);
+      rho[i] = std::sqrt((count - 1.0) / count);
+    }
+  }
+  for (const Blend& b : blends_) {
+    if (!still.standing && !was_standing_) rho[b.u] = b.rho;
+  }
+  for (int i : travel_inputs_) inputs_->setNoiseCorrelation(i, rho[i]);
+  was_standing_ = still.standing;
+  Eigen::MatrixXd covariance, slopes;
+  if (still.standing) {
+    if (!travels_at_) updateInputNoise();
+    Eigen::MatrixXd travel_slopes, other_slopes;
+    const double count = static_cast<double>(still.averaged);
+    covariance = travels_at_(k, &travel_slopes) / count + others_at_(k, &other_slopes);
+    slopes = travel_slopes / std::sqrt(count) + other_slopes;
+  } else {
+    covariance = inherited_at_(k, &slopes);
+  }
+  // The inputs not carried (the gyro) stay in the covariance alone.
+  Eigen::MatrixXd carried = Eigen::MatrixXd::Zero(slopes.rows(), slopes.cols());
+  for (int i : state_inputs_) {
+    carried.col(i) = slopes.col(i);
+    carried.col(n + i) = slopes.col(n + i);
+  }
+  o->extra_covariance = covariance(o->channels, o->channels);
+  o->input_slopes = carried(o->channels, Eigen::all);
+  o->input_correlation = rho;
 }
 
 void RoadFreeStream::blendTravel(Blend& b, double t, std::vector<double>* in) const {

@@ -86,6 +86,7 @@ class RoadFreeStream {
     int u = -1, v = -1;  // input indices
     bool started = false;
     double u_blended = 0.0, t_last = 0.0, v_last = 0.0;
+    double rho = 0.0;  // lag-1 correlation of the blended travel's noise
   };
   void blendTravel(Blend& b, double t, std::vector<double>* in) const;
   // The blended travels' noise (absolute_, relative_ and the inputs' lag-1
@@ -94,6 +95,9 @@ class RoadFreeStream {
   // kObservedInterval: the sample at t taken; the interval renewed.
   void observeInterval(double t);
   void updateInputNoise();
+  // filter.horizon.input_noise: state: this sample's inherited covariance
+  // and its inputs' slopes and lag-1 correlations (Measurement::input_slopes).
+  void inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o);
 
   std::string source_;
   std::shared_ptr<ReadingInputs> inputs_;
@@ -119,6 +123,11 @@ class RoadFreeStream {
   MechanicalModel::SampleInputNoise travels_at_, others_at_;
   Eigen::VectorXd raw_absolute_, raw_relative_;  // each input's noise before any blend
   std::vector<int> travel_inputs_, rate_inputs_;
+  // filter.horizon.input_noise: state: the inputs whose noise the estimator
+  // carries (those not also predicted: the gyro's reading is the previous
+  // sample's measurement); whether the sample before was standing.
+  std::vector<int> state_inputs_;
+  bool was_standing_ = false;
 };
 
 // A whole record through the stream: the model and the outputs. The samples

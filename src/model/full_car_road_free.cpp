@@ -371,8 +371,10 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
   const bool gyros = gyro_x_ >= 0;
   const int gx = gyro_x_, gy = gyro_y_;
   const std::vector<int> integrated = gyros ? std::vector<int>{gx, gy} : std::vector<int>{};
-  return [c, integrated, absolute, relative, gyros, gx, gy, inputs = inputs_](std::size_t k) {
+  return [c, integrated, absolute, relative, gyros, gx, gy, inputs = inputs_](std::size_t k,
+                                                                               Eigen::MatrixXd* slopes) {
     const auto& p = c->points.front();
+    Eigen::MatrixXd four;
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 4,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* angle,
@@ -380,10 +382,15 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
           const double gyro_before[2] = {gyros ? before[gx] : 0.0, gyros ? before[gy] : 0.0};
           const double roll = gyros ? angle[0] : 0.0, pitch = gyros ? -angle[1] : 0.0;
           outputs(*c, p, now, before, at_rest, dt, roll, pitch, roll, pitch, gyro_before, out);
-        });
+        },
+        slopes ? &four : nullptr);
     Eigen::MatrixXd covariance =
         Eigen::MatrixXd::Zero(FullCarModel::kChannels, FullCarModel::kChannels);
     covariance.block(8, 8, 4, 4) = v;
+    if (slopes) {
+      *slopes = Eigen::MatrixXd::Zero(FullCarModel::kChannels, four.cols());
+      slopes->middleRows(8, 4) = four;
+    }
     return covariance;
   };
 }
@@ -391,7 +398,8 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
 Eigen::VectorXd FullCarRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
-  return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
+  const SampleInputNoise at = inputNoiseBySample(absolute, relative, mean_accel_z);
+  return meanVarianceOverSamples([&at](std::size_t k) { return at(k, nullptr); },
                                  inputs_->samples(), FullCarModel::kChannels);
 }
 

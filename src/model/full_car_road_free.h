@@ -55,6 +55,7 @@ class FullCarRoadFreeModel : public MechanicalModel {
   SampleInputNoise inputNoiseBySample(const Eigen::VectorXd& absolute,
                                       const Eigen::VectorXd& relative,
                                       double mean_accel_z) const override;
+  int inputCount() const override { return inputs_->count(); }
   Eigen::VectorXd inputNoiseVariance(const Eigen::VectorXd& absolute,
                                      const Eigen::VectorXd& relative,
                                      double mean_accel_z) const override;

@@ -9,7 +9,8 @@ Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t
                                         const Eigen::VectorXd& absolute,
                                         const Eigen::VectorXd& relative,
                                         const std::vector<int>& integrated, int outputs,
-                                        const ReadingOutputs& evaluate) {
+                                        const ReadingOutputs& evaluate,
+                                        Eigen::MatrixXd* slopes) {
   const int n = inputs.count();
   const int m = static_cast<int>(integrated.size());
   std::vector<double> now0(static_cast<std::size_t>(n)), before0(now0.size()), now(now0.size()),
@@ -59,6 +60,11 @@ Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t
     if (rho == 0.0) continue;
     const Eigen::MatrixXd cross = now_change.row(i).transpose() * before_change.row(i);
     covariance += rho * (cross + cross.transpose());
+  }
+  if (slopes) {
+    slopes->resize(outputs, 2 * n);
+    slopes->leftCols(n) = now_change.transpose();
+    slopes->rightCols(n) = before_change.transpose();
   }
   return covariance;
 }

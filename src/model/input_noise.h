@@ -25,12 +25,16 @@ using ReadingOutputs = std::function<void(const double* now, const double* befor
 // of an input at k and at k - 1 is correlated by inputs.noiseCorrelation
 // (0: independent). Returns the covariance of the summed changes between
 // the outputs (outputs x outputs): one input's noise moves every output that
-// reads it, so the outputs' errors are correlated.
+// reads it, so the outputs' errors are correlated. slopes (optional,
+// outputs x 2 inputs): each input's change of the outputs by its noise at
+// k (first inputs.count() columns) and at k - 1 (the rest), the derivative
+// times that noise's std; the integrated inputs' walks are not in it.
 Eigen::MatrixXd inputOutputCovarianceAt(const ReadingInputs& inputs, std::size_t k,
                                         const Eigen::VectorXd& absolute,
                                         const Eigen::VectorXd& relative,
                                         const std::vector<int>& integrated, int outputs,
-                                        const ReadingOutputs& evaluate);
+                                        const ReadingOutputs& evaluate,
+                                        Eigen::MatrixXd* slopes = nullptr);
 
 // The mean of the diagonal of `at` (per model channel, `channels` square)
 // over samples 0..n-1 (a whole record: none forgotten).

@@ -111,8 +111,13 @@ class MechanicalModel {
   // unknown). By sample (the sample's own inputs, those before it for the
   // gyro's angle): a function of the sample index, prepared once (the load
   // weighed by the inputs so far). Null for other models.
-  // inputNoiseVariance: the mean of its diagonal over the samples.
-  using SampleInputNoise = std::function<Eigen::MatrixXd(std::size_t sample)>;
+  // inputNoiseVariance: the mean of its diagonal over the samples. slopes
+  // (optional, channels x 2 inputs): each input's change of the channels by
+  // its noise at the sample and at the one before (inputOutputCovarianceAt).
+  using SampleInputNoise = std::function<Eigen::MatrixXd(std::size_t sample, Eigen::MatrixXd* slopes)>;
+  // Road-free models: how many readings are inputs (inputNoiseBySample's
+  // order); 0 for other models.
+  virtual int inputCount() const { return 0; }
   virtual SampleInputNoise inputNoiseBySample(const Eigen::VectorXd& /*absolute*/,
                                               const Eigen::VectorXd& /*relative*/,
                                               double /*mean_accel_z*/) const {

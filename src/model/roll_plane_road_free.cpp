@@ -369,8 +369,9 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
   std::shared_ptr<const RoadFreeConstants> c = constants(Eigen::MatrixXd(vehicle));
   const int gyro = gyro_;
   const std::vector<int> integrated = gyro >= 0 ? std::vector<int>{gyro} : std::vector<int>{};
-  return [c, integrated, absolute, relative, gyro, inputs = inputs_](std::size_t k) {
+  return [c, integrated, absolute, relative, gyro, inputs = inputs_](std::size_t k, Eigen::MatrixXd* slopes) {
     const RoadFreeConstants::Point& p = c->points.front();
+    Eigen::MatrixXd three;
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 3,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
@@ -378,10 +379,15 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
           const double gyro_before = gyro >= 0 ? before[gyro] : 0.0;
           outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
                   gyro_before, out);
-        });
+        },
+        slopes ? &three : nullptr);
     Eigen::MatrixXd covariance =
         Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, RollPlaneModel::kChannels);
     covariance.block(4, 4, 3, 3) = v;
+    if (slopes) {
+      *slopes = Eigen::MatrixXd::Zero(RollPlaneModel::kChannels, three.cols());
+      slopes->middleRows(4, 3) = three;
+    }
     return covariance;
   };
 }
@@ -389,7 +395,8 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
 Eigen::VectorXd RollPlaneRoadFreeModel::inputNoiseVariance(const Eigen::VectorXd& absolute,
                                          const Eigen::VectorXd& relative,
                                          double mean_accel_z) const {
-  return meanVarianceOverSamples(inputNoiseBySample(absolute, relative, mean_accel_z),
+  const SampleInputNoise at = inputNoiseBySample(absolute, relative, mean_accel_z);
+  return meanVarianceOverSamples([&at](std::size_t k) { return at(k, nullptr); },
                                  inputs_->samples(), RollPlaneModel::kChannels);
 }
 

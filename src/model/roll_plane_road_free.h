@@ -68,6 +68,7 @@ class RollPlaneRoadFreeModel : public MechanicalModel {
                                      const Eigen::VectorXd& relative,
                                      double mean_accel_z) const override;
   const ReadingInputs& inputs() const { return *inputs_; }
+  int inputCount() const override { return inputs_->count(); }
 
   // Tyre loads from the readings at t: on each side the suspension's force
   // (the spring at the compression delta_ref - u_i, its static part the

@@ -68,7 +68,7 @@ TEST(RoadFreeStream, InheritedVarianceIsTheSamplesOwn) {
     const auto prefix = std::make_shared<const ReadingInputs>(inputs, times, columns);
     const auto model = c.model_type->buildRoadFree(*c.modelParameters(), prefix, c.measurement.zero);
     const Eigen::MatrixXd expected =
-        model->inputNoiseBySample(abs_std, rel, accel_z / k)(static_cast<std::size_t>(k - 1));
+        model->inputNoiseBySample(abs_std, rel, accel_z / k)(static_cast<std::size_t>(k - 1), nullptr);
     const Measurement& out = split.outputs[static_cast<std::size_t>(k - 1)];
     ASSERT_EQ(out.extra_covariance.rows(), 3);
     ASSERT_EQ(out.extra_covariance.cols(), 3);
