@@ -129,6 +129,13 @@ void Standstill::commit(double t, const std::vector<double>& raw, const Decision
     ++standing_samples_;
   } else {
     count_ = 0;
+    // A stop just ended: recognising one again takes a whole window of
+    // quiet readings after it (the window before still reads quiet while
+    // the vehicle drives off).
+    if (standing_) {
+      times_.clear();
+      values_.clear();
+    }
   }
   standing_ = d.standing;
   times_.push_back(t);

@@ -272,6 +272,14 @@ TEST(RoadFreeStream, AStopTakesTheTravelsMeanAndNoRate) {
   EXPECT_EQ(in[0], 0.02 + 0.003);
   EXPECT_EQ(in[2], 8.0 * sv);
   EXPECT_EQ(stream.standingSamples(), 800);
+  // A drive-off's first readings stay within a few std: the stop, once
+  // ended, is not taken up again by the quiet window before it, only a
+  // whole window of quiet readings after it.
+  for (int k = 1002; k <= 1300; ++k) {
+    const double tk = k * dt;
+    ASSERT_EQ(stream.add(sample(tk, 0.02 + su * normal(rng), sv * normal(rng)), &out), "");
+    EXPECT_EQ(stream.standing(), k > 1001 + 199) << k;
+  }
   // A 3 mm travel at 1.5 Hz with its rate (plus the same noise): never standing.
   RoadFreeStream driving(c, RoadFreeStream::inputsFor(c));
   const double w = 2.0 * M_PI * 1.5, a = 0.003;
