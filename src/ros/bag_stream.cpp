@@ -4,6 +4,7 @@
 
 #include <deque>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <utility>
 
@@ -100,12 +101,17 @@ class BagRecordStream : public RecordStream {
   std::string path_;
   BagReadOptions options_;
   int passes_ = 0;
+  // Opened once: rosbag loads every message's index entry on opening.
+  std::unique_ptr<rosbag::Bag> bag_;
 };
 
 bool BagRecordStream::readOnce(const std::function<void(Measurement&)>& take, bool first) {
   const std::string& path = path_;
-  rosbag::Bag bag;
-  bag.open(path, rosbag::bagmode::Read);
+  if (!bag_) {
+    bag_ = std::make_unique<rosbag::Bag>();
+    bag_->open(path, rosbag::bagmode::Read);
+  }
+  rosbag::Bag& bag = *bag_;
   std::vector<std::string> topics;
   const std::string joint_topic =
       findTopic<sensor_msgs::JointState>(path, bag, options_.joint_states_topic, &topics);
