@@ -1,6 +1,8 @@
 #include "pc_ekf/io/road_free_record_stream.h"
 
 #include <condition_variable>
+#include <cstdint>
+#include <cstdio>
 #include <deque>
 #include <exception>
 #include <map>
@@ -41,6 +43,60 @@ RoadFreeCheck checkFrom(const EstimatorConfig& c, RecordStream& record,
   return check.finish();
 }
 
+}  // namespace
+
+// The selected samples written as they are (the doubles' bytes) to a
+// temporary file, deleted when closed: reading them back costs far less than
+// decoding a bag again, and holds nothing per sample in memory.
+class RecordSpill {
+ public:
+  RecordSpill() : file_(std::tmpfile()) {
+    if (file_) std::setvbuf(file_, nullptr, _IOFBF, 1 << 20);
+  }
+  ~RecordSpill() {
+    if (file_) std::fclose(file_);
+  }
+  RecordSpill(const RecordSpill&) = delete;
+  RecordSpill& operator=(const RecordSpill&) = delete;
+  // False once a sample could not be written (or holds more than its
+  // readings and variances).
+  bool usable() const { return file_ && ok_; }
+  void write(const Measurement& m) {
+    if (!usable()) return;
+    const std::uint32_t n = static_cast<std::uint32_t>(m.channels.size());
+    const std::uint8_t variances = m.variances.size() != 0;
+    ok_ = m.extra_covariance.size() == 0 && m.input_slopes.size() == 0 &&
+          m.input_correlation.size() == 0 && m.values.size() == n &&
+          (!variances || m.variances.size() == n) && put(&m.time, sizeof m.time) &&
+          put(&n, sizeof n) && put(m.channels.data(), n * sizeof(int)) &&
+          put(m.values.data(), n * sizeof(double)) && put(&variances, 1) &&
+          (!variances || put(m.variances.data(), n * sizeof(double)));
+  }
+  bool rewind() { return usable() && std::fflush(file_) == 0 && std::fseek(file_, 0, SEEK_SET) == 0; }
+  // The next sample (false at the end or on a read error).
+  bool read(Measurement* m) {
+    std::uint32_t n = 0;
+    std::uint8_t variances = 0;
+    if (!get(&m->time, sizeof m->time) || !get(&n, sizeof n)) return false;
+    m->channels.resize(n);
+    m->values.resize(n);
+    if (!get(m->channels.data(), n * sizeof(int)) || !get(m->values.data(), n * sizeof(double)) ||
+        !get(&variances, 1)) {
+      return false;
+    }
+    m->variances.resize(variances ? n : 0);
+    return !variances || get(m->variances.data(), n * sizeof(double));
+  }
+
+ private:
+  bool put(const void* p, std::size_t size) { return size == 0 || std::fwrite(p, size, 1, file_) == 1; }
+  bool get(void* p, std::size_t size) { return size == 0 || std::fread(p, size, 1, file_) == 1; }
+  std::FILE* file_;
+  bool ok_ = true;
+};
+
+namespace {
+
 // The record read once on a thread, handed over in blocks of samples; at
 // most kBlocks wait. Destroyed early (the run failed) it stops the reading.
 class ReadAhead {
@@ -54,6 +110,11 @@ class ReadAhead {
     }
     changed_.notify_all();
     thread_.join();
+  }
+  // False (once next() gave null): the record could not be read as a stream.
+  bool streamed() {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return streamed_;
   }
   // The next block, or null at the end; throws what the reading threw.
   const std::vector<Measurement>* next() {
@@ -86,13 +147,12 @@ class ReadAhead {
       changed_.notify_all();
     };
     std::exception_ptr error;
+    bool streamed = false;
     try {
-      if (!readSelected(c, record, [&](const Measurement& m) {
-            block.push_back(m);
-            if (block.size() == kBlock) hand();
-          })) {
-        throw std::logic_error(c.source + ": the record could not be read again");
-      }
+      streamed = readSelected(c, record, [&](const Measurement& m) {
+        block.push_back(m);
+        if (block.size() == kBlock) hand();
+      });
       if (!block.empty()) hand();
     } catch (const Stopped&) {
     } catch (...) {
@@ -100,6 +160,7 @@ class ReadAhead {
     }
     std::lock_guard<std::mutex> lock(mutex_);
     error_ = error;
+    streamed_ = streamed;
     done_ = true;
     changed_.notify_all();
   }
@@ -107,7 +168,7 @@ class ReadAhead {
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<std::vector<Measurement>> blocks_;
-  bool taken_ = false, done_ = false, stop_ = false;
+  bool taken_ = false, done_ = false, stop_ = false, streamed_ = false;
   std::exception_ptr error_;
   std::thread thread_;  // last: starts once the rest is made
 };
@@ -125,13 +186,20 @@ std::optional<CheckedRoadFreeStream> checkRoadFreeStream(const EstimatorConfig& 
   ZeroConventionSum zero(c);
   std::map<int, std::size_t> last_read;  // channel -> last sample reading it
   std::size_t count = 0;
-  const bool streamed = readSelected(c, record, [&](const Measurement& m) {
-    zero.add(m);
-    for (int ch : m.channels) last_read[ch] = count;
-    check.add(m);
-    ++count;
-  });
-  if (!streamed) return std::nullopt;
+  auto spill = std::make_shared<RecordSpill>();
+  {
+    ReadAhead ahead(c, record);  // read on a thread of its own, checked here
+    while (const std::vector<Measurement>* block = ahead.next()) {
+      for (const Measurement& m : *block) {
+        spill->write(m);
+        zero.add(m);
+        for (int ch : m.channels) last_read[ch] = count;
+        check.add(m);
+        ++count;
+      }
+    }
+    if (!ahead.streamed()) return std::nullopt;
+  }
   after_read();
   const std::string problem = zero.problem();
   if (!problem.empty()) throw ConfigError(name + ": " + problem);
@@ -150,6 +218,7 @@ std::optional<CheckedRoadFreeStream> checkRoadFreeStream(const EstimatorConfig& 
   // runRoadFreeOneStep checks the samples kept once more, with their inputs.
   r.inputs = RoadFreeStream::inputsFor(c, readFrom(r.dropped));
   if (r.inputs != inputs) checkFrom(c, record, r.inputs, r.dropped);
+  if (spill->rewind()) r.spill = std::move(spill);
   return r;
 }
 
@@ -158,6 +227,16 @@ OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, RecordStream& record,
   return runRoadFreeOneStep(
       c,
       [&](const std::function<void(const Measurement&)>& take) {
+        if (checked.spill) {
+          RecordSpill& spill = *checked.spill;
+          if (!spill.rewind()) throw std::runtime_error(c.source + ": temporary file not readable");
+          Measurement m;
+          for (std::size_t k = 0; k < checked.dropped + checked.samples; ++k) {
+            if (!spill.read(&m)) throw std::runtime_error(c.source + ": temporary file cut short");
+            if (k >= checked.dropped) take(m);
+          }
+          return;
+        }
         // Read on a thread of its own, a few blocks ahead of the filter: the
         // reading (a bag's decoding, alignment) costs no time of the run's.
         ReadAhead ahead(c, record);
@@ -166,6 +245,9 @@ OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, RecordStream& record,
           for (const Measurement& m : *block) {
             if (k++ >= checked.dropped) take(m);
           }
+        }
+        if (!ahead.streamed()) {
+          throw std::logic_error(c.source + ": the record could not be read again");
         }
       },
       checked.samples, checked.inputs, samples, RoadFreeStream::kObservedInterval);

@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -15,11 +16,16 @@
 
 namespace pc_ekf {
 
+class RecordSpill;
+
 struct CheckedRoadFreeStream {
   std::size_t samples = 0;  // after the dropped ones
   std::size_t dropped = 0;  // leading samples before every input had been read
   std::string warning;      // droppedWarning's ("" when none dropped)
   std::vector<std::string> inputs;  // RoadFreeStream::inputsFor the samples kept
+  // The samples as the checks read them, in a temporary file the run reads
+  // back (null: the record is read again).
+  std::shared_ptr<RecordSpill> spill;
 };
 
 // loadRecord's checks, in its order, on the record's channels that
