@@ -1,6 +1,7 @@
 // A road-free one-step run (road.source none) on a record read as a stream
 // (record_stream.h), with loadRecord's checks on a whole record: one pass
-// for the checks, keeping nothing per sample, then the run's own.
+// for the checks, keeping nothing per sample in memory (the samples go to a
+// temporary file), then the run on that file.
 #pragma once
 
 #include <cstddef>
