@@ -205,18 +205,28 @@ EnkfSettings makeEnkfSettings(const EstimatorConfig& c) {
 }
 
 std::string zeroConventionProblem(const EstimatorConfig& c, const MeasurementSeries& series) {
-  const int channel = c.model_type->description().channelIndex("accel_z");
-  if (channel < 0) return "";
-  double sum = 0.0;
-  long count = 0;
-  for (const Measurement& m : series) {
-    for (std::size_t i = 0; i < m.channels.size(); ++i) {
-      if (m.channels[i] != channel) continue;
-      sum += m.values[static_cast<Eigen::Index>(i)];
-      ++count;
-    }
+  ZeroConventionSum zero(c);
+  for (const Measurement& m : series) zero.add(m);
+  return zero.problem();
+}
+
+ZeroConventionSum::ZeroConventionSum(const EstimatorConfig& c)
+    : c_(c), channel_(c.model_type->description().channelIndex("accel_z")) {}
+
+void ZeroConventionSum::add(const Measurement& m) {
+  if (channel_ < 0) return;
+  for (std::size_t i = 0; i < m.channels.size(); ++i) {
+    if (m.channels[i] != channel_) continue;
+    sum_ += m.values[static_cast<Eigen::Index>(i)];
+    ++count_;
   }
-  if (count == 0) return "";
+}
+
+std::string ZeroConventionSum::problem() const {
+  const EstimatorConfig& c = c_;
+  if (channel_ < 0 || count_ == 0) return "";
+  const double sum = sum_;
+  const long count = count_;
   const int g_index = c.model_type->description().parameters().index("gravity");
   const double g = g_index >= 0 ? c.modelParameters()->values[g_index] : 9.81;
   const double mean = sum / static_cast<double>(count);

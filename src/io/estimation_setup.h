@@ -60,6 +60,19 @@ std::vector<int> channelIndices(const EstimatorConfig& c);
 // (a raw IMU, REP 145). A mean beyond g/2 of that is gravity left in, taken
 // out, or a z axis pointing down.
 std::string zeroConventionProblem(const EstimatorConfig& c, const MeasurementSeries& series);
+// The same summed one sample at a time (a record read as a stream).
+class ZeroConventionSum {
+ public:
+  explicit ZeroConventionSum(const EstimatorConfig& c);
+  void add(const Measurement& m);
+  std::string problem() const;
+
+ private:
+  const EstimatorConfig& c_;
+  int channel_;
+  double sum_ = 0.0;
+  long count_ = 0;
+};
 
 // `c` with the model parameters `names` declared uncertain as well: nominal
 // the configured vehicle's value, relative_range `range`, a Beta(2,2) germ,

@@ -119,9 +119,11 @@ std::ifstream openOrThrow(const std::string& path) {
 
 }  // namespace
 
-MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
-                                     const std::vector<std::string>& channels) {
-  MeasurementSeries series;
+namespace {
+
+void readMeasurementRows(std::istream& in, const std::string& source,
+                         const std::vector<std::string>& channels,
+                         const std::function<void(Measurement&)>& take) {
   std::vector<std::string> header{"t"};
   header.insert(header.end(), channels.begin(), channels.end());
   // The file's columns in the model's channel order (the file's header is
@@ -147,8 +149,16 @@ MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source
     }
     m.values = Eigen::Map<Eigen::VectorXd>(values.data(),
                                            static_cast<Eigen::Index>(values.size()));
-    series.push_back(std::move(m));
+    take(m);
   });
+}
+
+}  // namespace
+
+MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source,
+                                     const std::vector<std::string>& channels) {
+  MeasurementSeries series;
+  readMeasurementRows(in, source, channels, [&](Measurement& m) { series.push_back(std::move(m)); });
   return series;
 }
 
@@ -156,6 +166,12 @@ MeasurementSeries readMeasurementCsvFile(const std::string& path,
                                          const std::vector<std::string>& channels) {
   std::ifstream in = openOrThrow(path);
   return readMeasurementCsv(in, path, channels);
+}
+
+void readMeasurementCsvFileRows(const std::string& path, const std::vector<std::string>& channels,
+                                const std::function<void(Measurement&)>& take) {
+  std::ifstream in = openOrThrow(path);
+  readMeasurementRows(in, path, channels, take);
 }
 
 void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series,

@@ -5,6 +5,7 @@
 // SI units, one sample a row, time strictly increasing.
 #pragma once
 
+#include <functional>
 #include <istream>
 #include <stdexcept>
 #include <string>
@@ -26,6 +27,10 @@ MeasurementSeries readMeasurementCsv(std::istream& in, const std::string& source
                                      const std::vector<std::string>& channels = rollPlaneChannels());
 MeasurementSeries readMeasurementCsvFile(
     const std::string& path, const std::vector<std::string>& channels = rollPlaneChannels());
+// The file's samples one at a time to `take`, line by line (the same
+// samples and errors as readMeasurementCsvFile's, none held).
+void readMeasurementCsvFileRows(const std::string& path, const std::vector<std::string>& channels,
+                                const std::function<void(Measurement&)>& take);
 void writeMeasurementCsv(std::ostream& out, const MeasurementSeries& series,
                          const std::vector<std::string>& channels = rollPlaneChannels());
 

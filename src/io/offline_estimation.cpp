@@ -228,32 +228,50 @@ OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const MeasurementSeri
                                  SampleSink* samples, double interval) {
   if (readings.empty()) throw std::invalid_argument(c.source + ": no samples to estimate from");
   checkRoadFreeRecord(c, readings);  // a refused sample fails now, not hours in
+  return runRoadFreeOneStep(
+      c,
+      [&readings](const std::function<void(const Measurement&)>& take) {
+        for (const Measurement& m : readings) take(m);
+      },
+      readings.size(), RoadFreeStream::inputsFor(c, &readings), samples, interval);
+}
+
+OfflineResult runRoadFreeOneStep(const EstimatorConfig& c, const ReadingPass& readings,
+                                 std::size_t count, const std::vector<std::string>& inputs,
+                                 SampleSink* samples, double interval) {
+  if (count == 0) throw std::invalid_argument(c.source + ": no samples to estimate from");
   const auto start = std::chrono::steady_clock::now();
   OfflineResult r;
   r.method = toString(EstimationMethod::kOneStep);
   r.update = toString(c.update);
-  r.samples = static_cast<int>(readings.size());
-  RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &readings), interval);
+  r.samples = static_cast<int>(count);
+  RoadFreeStream stream(c, inputs, interval);
   OneStepRun run(c, stream.model(), samples, &r);
   // The coherence filter in step with the stream: the inputs it reads are
   // appended, and forgotten once neither filter needs them.
   const std::size_t k = static_cast<std::size_t>(c.health.coherence_decimation);
   std::optional<OneStepFilter> coarse;
-  if (coherenceRuns(c, readings.size())) {
+  if (coherenceRuns(c, count)) {
     coarse.emplace(run.propagator().withThreads(1), coherenceSettings(run.settings()));
   }
   std::optional<StepResult> decimated;
   Measurement outputs;
-  for (std::size_t i = 0; i < readings.size(); ++i) {
-    const std::string problem = stream.add(readings[i], &outputs);
-    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, i, readings[i], problem));
+  std::size_t i = 0;
+  readings([&](const Measurement& m) {
+    const std::string problem = stream.add(m, &outputs);
+    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, i, m, problem));
     run.process(outputs);
     if (coarse && (i + 1) % k == 0) decimated = coarse->process(outputs);
     const double needed = run.filter().roadNeededFrom();
     stream.forgetInputs(coarse ? std::min(needed, coarse->roadNeededFrom()) : needed,
                         -std::numeric_limits<double>::infinity());
+    ++i;
+  });
+  if (i != count) {
+    throw std::logic_error(c.source + ": " + std::to_string(i) + " samples read, " +
+                           std::to_string(count) + " expected");
   }
-  run.finish(readings.size(), decimated);
+  run.finish(count, decimated);
   finishRun(c, start, &r);
   return r;
 }

@@ -66,6 +66,13 @@ OfflineResult runOfflineEstimation(const EstimatorConfig& config, const Measurem
 OfflineResult runRoadFreeOneStep(const EstimatorConfig& config, const MeasurementSeries& readings,
                                  SampleSink* samples = nullptr,
                                  double interval = RoadFreeStream::kObservedInterval);
+// The same run on readings that `readings` reads once, each to its
+// argument in order: `count` of them, already checked (checkRoadFreeRecord
+// finds nothing to drop or refuse), `inputs` RoadFreeStream::inputsFor them.
+using ReadingPass = std::function<void(const std::function<void(const Measurement&)>&)>;
+OfflineResult runRoadFreeOneStep(const EstimatorConfig& config, const ReadingPass& readings,
+                                 std::size_t count, const std::vector<std::string>& inputs,
+                                 SampleSink* samples, double interval);
 
 std::string toJson(const OfflineResult& r);
 

@@ -12,16 +12,22 @@ namespace pc_ekf {
 
 std::vector<std::string> RoadFreeStream::inputsFor(const EstimatorConfig& c,
                                                    const MeasurementSeries* record) {
+  return inputsFor(c, [record](int ch) {
+    return !record || std::any_of(record->begin(), record->end(), [&](const Measurement& m) {
+      return std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end();
+    });
+  });
+}
+
+std::vector<std::string> RoadFreeStream::inputsFor(const EstimatorConfig& c,
+                                                   const std::function<bool(int)>& read) {
   const ModelType::RoadFreeInputs wanted = c.model_type->roadFreeInputs();
   const std::vector<int> selected = channelIndices(c);
   std::vector<std::string> names = wanted.required;
   for (const std::string& o : wanted.optional) {
     const int ch = c.model_type->description().channelIndex(o);
     if (std::find(selected.begin(), selected.end(), ch) == selected.end()) continue;
-    const bool read = !record || std::any_of(record->begin(), record->end(), [&](const Measurement& m) {
-      return std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end();
-    });
-    if (read) names.push_back(o);
+    if (read(ch)) names.push_back(o);
   }
   return names;
 }
@@ -342,44 +348,55 @@ RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries&
 }
 
 RoadFreeCheck checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record) {
-  // The stream refuses what its inputs refuse (the travel blend keeps a
-  // reading finite): the raw inputs through inputs of their own, forgotten
-  // as they go.
-  const std::vector<std::string> names = RoadFreeStream::inputsFor(c, &record);
-  std::vector<int> channels;
-  for (const std::string& name : names) {
-    channels.push_back(c.model_type->description().channelIndex(name));
+  RoadFreeChecker check(c, RoadFreeStream::inputsFor(c, &record));
+  for (const Measurement& m : record) check.add(m);
+  return check.finish();
+}
+
+// The stream refuses what its inputs refuse (the travel blend keeps a
+// reading finite): the raw inputs through inputs of their own, forgotten as
+// they go.
+RoadFreeChecker::RoadFreeChecker(const EstimatorConfig& c, const std::vector<std::string>& inputs)
+    : c_(c), inputs_(inputs), in_(inputs.size()) {
+  for (const std::string& name : inputs) {
+    channels_.push_back(c.model_type->description().channelIndex(name));
   }
-  ReadingInputs inputs(names);
-  std::vector<double> in(names.size());
-  RoadFreeCheck check;
-  std::string first_problem;
-  for (std::size_t k = 0; k < record.size(); ++k) {
-    const Measurement& m = record[k];
-    std::fill(in.begin(), in.end(), std::numeric_limits<double>::quiet_NaN());
-    for (std::size_t j = 0; j < m.channels.size(); ++j) {
-      const auto it = std::find(channels.begin(), channels.end(), m.channels[j]);
-      if (it == channels.end()) continue;
-      in[static_cast<std::size_t>(it - channels.begin())] = m.values[static_cast<Eigen::Index>(j)];
+}
+
+void RoadFreeChecker::add(const Measurement& m) {
+  if (!refusal_.empty()) return;
+  const std::size_t k = k_++;
+  std::fill(in_.begin(), in_.end(), std::numeric_limits<double>::quiet_NaN());
+  for (std::size_t j = 0; j < m.channels.size(); ++j) {
+    const auto it = std::find(channels_.begin(), channels_.end(), m.channels[j]);
+    if (it == channels_.end()) continue;
+    in_[static_cast<std::size_t>(it - channels_.begin())] = m.values[static_cast<Eigen::Index>(j)];
+  }
+  const bool waiting = std::isfinite(m.time) && check_.dropped == k &&
+                       std::any_of(in_.begin(), in_.end(), [](double v) { return std::isnan(v); });
+  const std::string problem = inputs_.append(m.time, in_.data());
+  if (!problem.empty() && waiting) {  // as estimator_node and roadFreeRecord: dropped
+    if (check_.dropped++ == 0) {
+      first_problem_ = "sample 1 (t = " + std::to_string(m.time) + " s): " + problem;
     }
-    const bool waiting = std::isfinite(m.time) && check.dropped == k &&
-                         std::any_of(in.begin(), in.end(), [](double v) { return std::isnan(v); });
-    const std::string problem = inputs.append(m.time, in.data());
-    if (!problem.empty() && waiting) {  // as estimator_node and roadFreeRecord: dropped
-      if (check.dropped++ == 0) {
-        first_problem = "sample 1 (t = " + std::to_string(m.time) + " s): " + problem;
-      }
-      continue;
-    }
-    if (!problem.empty()) throw ConfigError(roadFreeRefusal(c, k, m, problem));
-    inputs.forget(m.time, -std::numeric_limits<double>::infinity());
+    return;
   }
-  if (check.dropped == record.size() && check.dropped > 0) {
-    throw ConfigError(c.source + ": road.source none: no sample has every road-free input (" +
-                      std::to_string(check.dropped) + " samples; " + first_problem + ")");
+  if (!problem.empty()) {
+    refusal_ = roadFreeRefusal(c_, k, m, problem);
+    return;
   }
-  check.warning = droppedWarning(check.dropped, first_problem);
-  return check;
+  inputs_.forget(m.time, -std::numeric_limits<double>::infinity());
+}
+
+RoadFreeCheck RoadFreeChecker::finish() const {
+  if (!refusal_.empty()) throw ConfigError(refusal_);
+  if (check_.dropped == k_ && check_.dropped > 0) {
+    throw ConfigError(c_.source + ": road.source none: no sample has every road-free input (" +
+                      std::to_string(check_.dropped) + " samples; " + first_problem_ + ")");
+  }
+  RoadFreeCheck out = check_;
+  out.warning = droppedWarning(check_.dropped, first_problem_);
+  return out;
 }
 
 std::string roadFreeCaveat(const EstimatorConfig& c) {

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <Eigen/Dense>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -42,6 +43,10 @@ class RoadFreeStream {
   // read in it.
   static std::vector<std::string> inputsFor(const EstimatorConfig& c,
                                             const MeasurementSeries* record = nullptr);
+  // The same for a record read as a stream: `read(channel)` whether the
+  // record reads that model channel anywhere.
+  static std::vector<std::string> inputsFor(const EstimatorConfig& c,
+                                            const std::function<bool(int)>& read);
 
   // Built on the inputs appended so far (they grow under it).
   const std::shared_ptr<const MechanicalModel>& model() const { return model_; }
@@ -153,6 +158,24 @@ struct RoadFreeCheck {
   std::string warning;
 };
 RoadFreeCheck checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record);
+// checkRoadFreeRecord one sample at a time (a record read as a stream),
+// with the record's `inputs` (RoadFreeStream::inputsFor). After a refusal
+// later samples are not looked at; finish() throws it.
+class RoadFreeChecker {
+ public:
+  RoadFreeChecker(const EstimatorConfig& c, const std::vector<std::string>& inputs);
+  void add(const Measurement& m);
+  RoadFreeCheck finish() const;
+
+ private:
+  const EstimatorConfig& c_;
+  std::vector<int> channels_;
+  ReadingInputs inputs_;
+  std::vector<double> in_;
+  std::size_t k_ = 0;
+  RoadFreeCheck check_;
+  std::string first_problem_, refusal_;
+};
 // roadFreeRecord's warning for `dropped` leading samples ("" for none).
 std::string droppedWarning(std::size_t dropped, const std::string& first_problem);
 // That error's text for sample k (0-based) and the stream's reason.

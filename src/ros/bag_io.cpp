@@ -17,96 +17,13 @@
 #include <sstream>
 
 #include "pc_ekf/ros/bag_check.h"
+#include "pc_ekf/ros/bag_topics.h"
 
 namespace pc_ekf {
 
 namespace {
 
-std::int64_t nanoseconds(const ros::Time& t) {
-  return static_cast<std::int64_t>(t.sec) * 1000000000LL + t.nsec;
-}
-
-std::string stampText(const ros::Time& t) {
-  std::ostringstream o;
-  o << t.sec << "." << std::setw(9) << std::setfill('0') << t.nsec;
-  return o.str();
-}
-
-std::string join(const std::vector<std::string>& items) {
-  std::string s;
-  for (const auto& i : items) s += (s.empty() ? "" : ", ") + i;
-  return s.empty() ? "none" : s;
-}
-
-// The one topic of the bag that matches `suffix` with type T, or "" when
-// none matches. Throws BagError when several match or the type differs; a
-// topic recorded with another definition of T is an error too, unless
-// `other_definition` is given: then it is skipped and named there.
-template <typename T>
-std::string findTopic(const std::string& path, rosbag::Bag& bag, const std::string& suffix,
-                      std::vector<std::string>* all_topics,
-                      std::string* other_definition = nullptr) {
-  rosbag::View everything(bag);
-  std::set<std::string> matches;
-  all_topics->clear();
-  const std::string expected = ros::message_traits::DataType<T>::value();
-  for (const rosbag::ConnectionInfo* c : everything.getConnections()) {
-    all_topics->push_back(c->topic + " (" + c->datatype + ")");
-    if (!topicMatches(c->topic, suffix)) continue;
-    if (c->datatype != expected) {
-      throw BagError(path + ": topic '" + c->topic + "' has type " + c->datatype + ", expected " +
-                     expected);
-    }
-    if (c->md5sum != "*" && c->md5sum != ros::message_traits::MD5Sum<T>::value()) {
-      if (other_definition) {
-        *other_definition = c->topic;
-        continue;
-      }
-      throw BagError(path + ": topic '" + c->topic +
-                     "' was recorded with a different definition of " + expected + " (md5 " +
-                     c->md5sum + ")");
-    }
-    matches.insert(c->topic);
-  }
-  std::sort(all_topics->begin(), all_topics->end());
-  all_topics->erase(std::unique(all_topics->begin(), all_topics->end()), all_topics->end());
-  if (matches.size() > 1) {
-    throw BagError(path + ": several topics end in '" + suffix +
-                   "': " + join(std::vector<std::string>(matches.begin(), matches.end())));
-  }
-  return matches.empty() ? std::string() : *matches.begin();
-}
-
-// Decodes the messages on `topic` one at a time, each to `take`: a long
-// bag's messages are never held (their objects are many times the numbers
-// they carry).
-template <typename T>
-void readTopic(const std::string& path, rosbag::Bag& bag, const std::string& topic,
-               const std::function<void(const T&)>& take) {
-  if (topic.empty()) return;
-  rosbag::View view(bag, rosbag::TopicQuery(topic));
-  std::vector<std::uint8_t> bytes;
-  std::size_t read = 0;
-  for (const rosbag::MessageInstance& m : view) {
-    // roscpp resizes a vector to the length stored in the message before it
-    // checks the bytes are there: check the lengths first (bag_check.h).
-    bytes.resize(m.size());
-    ros::serialization::OStream raw(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
-    m.write(raw);
-    const std::string problem =
-        serializedMessageProblem(ros::message_traits::Definition<T>::value(),
-                                 ros::message_traits::DataType<T>::value(), bytes.data(), bytes.size());
-    if (!problem.empty()) {
-      throw BagError(path + ": message " + std::to_string(read + 1) + " on '" + topic +
-                     "' cannot be decoded: " + problem);
-    }
-    T msg;
-    ros::serialization::IStream in(bytes.data(), static_cast<std::uint32_t>(bytes.size()));
-    ros::serialization::deserialize(in, msg);
-    ++read;
-    take(msg);
-  }
-}
+using namespace bag_topics;
 
 // Road messages as read: stamps and heights only, sorted by stamp once all
 // are in.
@@ -124,12 +41,6 @@ struct RoadRows {
   }
 };
 
-struct StampedSample {
-  std::int64_t ns = 0;
-  ros::Time stamp;
-  Measurement m;
-};
-
 // Samples with equal stamps observing disjoint channels become one sample.
 MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedSample>& raw,
                                    int channels, std::vector<std::int64_t>* stamps) {
@@ -138,50 +49,10 @@ MeasurementSeries mergeEqualStamps(const std::string& path, std::vector<StampedS
   MeasurementSeries out;
   out.reserve(raw.size());
   stamps->reserve(raw.size());
-  std::vector<double> values(channels);
-  std::vector<bool> seen(channels);
   for (std::size_t i = 0; i < raw.size();) {
-    std::size_t j = i;
-    // A sample alone at its stamp with its channels in order is moved as it
-    // is (the record is not held twice).
-    Measurement& first = raw[i].m;
-    if ((i + 1 == raw.size() || raw[i + 1].ns != raw[i].ns) &&
-        std::adjacent_find(first.channels.begin(), first.channels.end(),
-                           std::greater_equal<int>()) == first.channels.end()) {
-      Measurement alone;
-      alone.time = first.time;
-      alone.channels = std::move(first.channels);
-      alone.values = std::move(first.values);
-      out.push_back(std::move(alone));
-      stamps->push_back(raw[i].ns);
-      ++i;
-      continue;
-    }
-    std::fill(values.begin(), values.end(), 0.0);
-    std::fill(seen.begin(), seen.end(), false);
-    for (; j < raw.size() && raw[j].ns == raw[i].ns; ++j) {
-      const Measurement& m = raw[j].m;
-      for (std::size_t k = 0; k < m.channels.size(); ++k) {
-        const int c = m.channels[k];
-        if (seen[c]) {
-          throw BagError(path + ": two suspension/joint_states messages stamped " +
-                         stampText(raw[i].stamp) + " both observe channel " + std::to_string(c) +
-                         (channels == 4 ? " (u1, u2, v1, v2 = 0..3)" : ""));
-        }
-        seen[c] = true;
-        values[c] = m.values(static_cast<Eigen::Index>(k));
-      }
-    }
-    Measurement merged;
-    merged.time = raw[i].m.time;
-    std::vector<double> kept;
-    for (int c = 0; c < channels; ++c) {
-      if (!seen[c]) continue;
-      merged.channels.push_back(c);
-      kept.push_back(values[c]);
-    }
-    merged.values = Eigen::Map<const Eigen::VectorXd>(kept.data(), kept.size());
-    out.push_back(std::move(merged));
+    std::size_t j = i + 1;
+    while (j < raw.size() && raw[j].ns == raw[i].ns) ++j;
+    out.push_back(mergeStampGroup(path, raw.data() + i, raw.data() + j, channels));
     stamps->push_back(raw[i].ns);
     i = j;
   }

@@ -12,6 +12,7 @@ pc_ekf::BagRecord readBagWithOptions(const std::string& path, const pc_ekf::BagR
 
 extern "C" const pc_ekf::RosEntryPoints* pc_ekf_ros_entry_points() {
   static const pc_ekf::RosEntryPoints entry{&readBagWithOptions, &pc_ekf::bagReadOptions,
-                                            &pc_ekf::modelRegistryWithPlugins};
+                                            &pc_ekf::modelRegistryWithPlugins,
+                                            &pc_ekf::bagRecordStream};
   return &entry;
 }

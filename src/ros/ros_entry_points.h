@@ -3,10 +3,12 @@
 // and uses no plugin model then starts without ROS's shared libraries.
 #pragma once
 
+#include <memory>
 #include <string>
 
 #include "pc_ekf/model/model_type.h"
 #include "pc_ekf/ros/bag_io.h"
+#include "pc_ekf/ros/bag_stream.h"
 
 namespace pc_ekf {
 
@@ -14,6 +16,8 @@ struct RosEntryPoints {
   BagRecord (*read_bag)(const std::string& path, const BagReadOptions& options);
   BagReadOptions (*bag_read_options)(const EstimatorConfig& config);
   ModelRegistry (*model_registry_with_plugins)();
+  std::unique_ptr<RecordStream> (*bag_record_stream)(const std::string& path,
+                                                     const BagReadOptions& options);
 };
 
 constexpr const char* kRosLibrary = "libpc_ekf_ros.so";

@@ -3,6 +3,7 @@
 #include <cstdlib>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 
 #include "pc_ekf/io/config_identity.h"
@@ -52,16 +53,19 @@ int main(int argc, char** argv) {
     if (args.has("--seed") && !args.unsignedValue("--seed", &given_seed, &status)) return status;
     const std::uint64_t seed = runSeed(config, args.has("--bag") || args.has("--measurements"),
                                        args.has("--seed") ? &given_seed : nullptr);
-    // Road-free one-step splits the readings as the filter goes (memory:
-    // the readings); the other methods, the sensitivity and
-    // tolerances_prune need the whole split first.
+    // Road-free one-step splits the readings as the filter goes, a bag's
+    // or CSV's read as a stream (memory independent of the record's
+    // length); the other methods, the sensitivity and tolerances_prune need
+    // the whole split first.
     const bool stream_road_free = config.road.source == RoadSource::kNone &&
                                   method == EstimationMethod::kOneStep &&
                                   !args.has("--sensitivity") && !(config.tolerances_prune > 0.0);
+    const std::string bag = args.has("--bag") ? args["--bag"] : "";
+    const std::string csv = args.has("--measurements") ? args["--measurements"] : "";
+    std::optional<StreamedRecord> streamed;
+    if (stream_road_free) streamed = streamRoadFreeRecord(config, bag, csv);
     const RecordInput record =
-        loadRecord(config, args.has("--bag") ? args["--bag"] : "",
-                   args.has("--measurements") ? args["--measurements"] : "", seed,
-                   !stream_road_free);
+        streamed ? RecordInput() : loadRecord(config, bag, csv, seed, !stream_road_free);
     const auto& model = record.model;
     const MeasurementSeries& series = record.series;
     PriorSensitivity sensitivity;
@@ -72,10 +76,12 @@ int main(int argc, char** argv) {
     std::unique_ptr<OfflineOutputs> out;
     if (args.has("--out")) out = std::make_unique<OfflineOutputs>(args["--out"]);
     OfflineResult result =
-        stream_road_free ? runRoadFreeOneStep(config, series, out.get(), record.interval)
-                         : runOfflineEstimation(config, series, model, method, seed, progress,
-                                                nullptr, out.get());
-    result.warnings.insert(result.warnings.begin(), record.warnings.begin(), record.warnings.end());
+        streamed           ? runRoadFreeOneStep(config, *streamed->stream, streamed->checked, out.get())
+        : stream_road_free ? runRoadFreeOneStep(config, series, out.get(), record.interval)
+                           : runOfflineEstimation(config, series, model, method, seed, progress,
+                                                  nullptr, out.get());
+    const std::vector<std::string>& warnings = streamed ? streamed->warnings : record.warnings;
+    result.warnings.insert(result.warnings.begin(), warnings.begin(), warnings.end());
     if (args.has("--sensitivity")) result.sensitivity = sensitivity;
     result.pruned_tolerances = pruned;
     std::cout << toJson(result) << std::flush;

@@ -5,12 +5,15 @@
 
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/record_sensitivity.h"
+#include "pc_ekf/io/record_stream.h"
+#include "pc_ekf/io/road_free_record_stream.h"
 #include "pc_ekf/io/road_free_stream.h"
 #include "pc_ekf/tools/ros_on_demand.h"
 
@@ -37,6 +40,15 @@ inline std::uint64_t runSeed(const EstimatorConfig& config, bool record,
   return record ? 0 : config.truth.seed;
 }
 
+// A bag's warnings on stderr: the first five (of `first`) and how many more.
+inline void printBagWarnings(const std::string& bag, const std::vector<std::string>& first,
+                             std::size_t count) {
+  for (std::size_t i = 0; i < first.size() && i < 5; ++i) {
+    std::cerr << "[bag] " << bag << ": " << first[i] << "\n";
+  }
+  if (count > 5) std::cerr << "[bag] ... and " << count - 5 << " more warnings\n";
+}
+
 // `bag` and `csv` are paths ("" when not given; at most one of them).
 // With road.source none the model is the road-free one built from the
 // record (RoadFreeStream), the series its outputs; with `split_road_free`
@@ -49,12 +61,7 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   std::shared_ptr<const ContactRoad> bag_road;
   if (!bag.empty()) {
     BagRecord record = readBagOnDemand(bag, config);
-    for (std::size_t i = 0; i < record.warnings.size() && i < 5; ++i) {
-      std::cerr << "[bag] " << bag << ": " << record.warnings[i] << "\n";
-    }
-    if (record.warnings.size() > 5) {
-      std::cerr << "[bag] ... and " << record.warnings.size() - 5 << " more warnings\n";
-    }
+    printBagWarnings(bag, record.warnings, record.warnings.size());
     if (config.road.source != RoadSource::kNone) {
       bag_road = std::make_shared<SampledRoad>(record.road_contacts.t, record.road_contacts.heights);
     }
@@ -112,6 +119,35 @@ inline EstimatorConfig sensitivityAndPrune(const EstimatorConfig& config, const 
   const EstimatorConfig out = pruneTolerances(config, *sensitivity, pruned);
   for (const auto& line : *pruned) std::cerr << "[tolerances_prune] " << line << "\n";
   return out;
+}
+
+// A bag or CSV for road-free one-step (loadRecord with split_road_free
+// false) read as a stream instead of whole: checked now with loadRecord's
+// messages, estimated by runRoadFreeOneStep(config, *stream, checked, ...).
+struct StreamedRecord {
+  std::unique_ptr<RecordStream> stream;
+  CheckedRoadFreeStream checked;
+  std::vector<std::string> warnings;  // as RecordInput's
+};
+// std::nullopt when there is no such record or it is to be read whole.
+inline std::optional<StreamedRecord> streamRoadFreeRecord(const EstimatorConfig& config,
+                                                          const std::string& bag,
+                                                          const std::string& csv) {
+  if (bag.empty() == csv.empty() || config.road.source != RoadSource::kNone) return std::nullopt;
+  StreamedRecord r;
+  r.stream = !bag.empty() ? bagRecordStreamOnDemand(bag, config)
+                          : csvRecordStream(csv, config.model_type->channelNames());
+  const std::string& name = !bag.empty() ? bag : csv;
+  const auto checked = checkRoadFreeStream(config, *r.stream, name, [&] {
+    if (!bag.empty()) printBagWarnings(bag, r.stream->warnings(), r.stream->warningCount());
+  });
+  if (!checked) return std::nullopt;
+  r.checked = *checked;
+  if (!checked->warning.empty()) {
+    std::cerr << "[road-free] " << name << ": " << checked->warning << "\n";
+    r.warnings.push_back(checked->warning);
+  }
+  return r;
 }
 
 }  // namespace pc_ekf

@@ -7,6 +7,7 @@
 
 #include <dlfcn.h>
 
+#include <memory>
 #include <stdexcept>
 #include <string>
 
@@ -38,6 +39,13 @@ inline const RosEntryPoints& rosOnDemand(const std::string& why) {
 inline BagRecord readBagOnDemand(const std::string& path, const EstimatorConfig& config) {
   const RosEntryPoints& ros = rosOnDemand("needed to read the bag " + path);
   return ros.read_bag(path, ros.bag_read_options(config));
+}
+
+// A road-free bag read as a stream (bag_stream.h).
+inline std::unique_ptr<RecordStream> bagRecordStreamOnDemand(const std::string& path,
+                                                             const EstimatorConfig& config) {
+  const RosEntryPoints& ros = rosOnDemand("needed to read the bag " + path);
+  return ros.bag_record_stream(path, ros.bag_read_options(config));
 }
 
 // The built-in model types now; a plugin name (package/Class) loads the ROS
