@@ -130,7 +130,16 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
   }
 
   if (batch_series_.size() < static_cast<std::size_t>(config_.node.max_batch_samples)) {
-    batch_series_.push_back(m);
+    if (m.input_slopes.size() == 0) {
+      batch_series_.push_back(m);
+    } else {
+      // The batch methods take each sample's inherited covariance, not the
+      // input-noise states' slopes: not kept (about 300 bytes a sample).
+      Measurement kept = m;
+      kept.input_slopes = Eigen::MatrixXd();
+      kept.input_correlation = Eigen::VectorXd();
+      batch_series_.push_back(kept);
+    }
     batch_last_stamp_ = stamp;
   } else {
     out.batch_full = true;
