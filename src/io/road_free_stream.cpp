@@ -114,6 +114,8 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
   }
   observe_interval_ = !(interval > 0.0) && !blends_.empty();
   accel_z_ = type.description().channelIndex("accel_z");
+  const auto yaw = std::find(inputs.begin(), inputs.end(), "gyro_z");
+  if (yaw != inputs.end()) yaw_ = static_cast<int>(yaw - inputs.begin());
   if (c.safeguards.horizon.window > 0.0 && c.safeguards.horizon.input_noise_states) {
     for (std::size_t i = 0; i < inputs.size(); ++i) {
       if (std::find(outputs_.begin(), outputs_.end(), input_channels_[i]) == outputs_.end()) {
@@ -190,8 +192,29 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     b.t_last = m.time;
     b.v_last = 0.0;
   }
+  // The yaw rate shrunk by its spread so far (yaw_ above); kept if taken.
+  double yaw_square = yaw_square_, yaw_time = yaw_time_, yaw_shrink = yaw_shrink_;
+  if (yaw_ >= 0 && std::isfinite(in[static_cast<std::size_t>(yaw_)])) {
+    double& r = in[static_cast<std::size_t>(yaw_)];
+    if (!std::isfinite(yaw_square_) || !(m.time > yaw_time_)) {
+      yaw_square = r * r;
+    } else {
+      const double a = std::exp(-(m.time - yaw_time_) / kYawWindow);
+      yaw_square = a * yaw_square_ + (1.0 - a) * r * r;
+    }
+    yaw_time = m.time;
+    const double sigma = std::hypot(raw_absolute_[yaw_], raw_relative_[yaw_] * r);
+    yaw_shrink = yaw_square > 0.0 ? std::max(0.0, 1.0 - sigma * sigma / yaw_square) : 0.0;
+    r *= yaw_shrink;
+  }
   const std::string problem = inputs_->append(m.time, in.data());
   if (!problem.empty()) return problem;
+  if (yaw_ >= 0) {
+    yaw_square_ = yaw_square;
+    yaw_time_ = yaw_time;
+    yaw_shrink_before_ = samples_ > 0 ? yaw_shrink_ : 1.0;
+    yaw_shrink_ = yaw_shrink;
+  }
   blends_.swap(blend_next_);
   standstill_.commit(m.time, raw_, still);
   ++samples_;
@@ -208,6 +231,19 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   const auto k = static_cast<std::size_t>(samples_ - 1);
   if (!state_inputs_.empty()) {
     inputSlopes(k, still, &o);
+  } else if (yaw_ >= 0) {
+    Eigen::MatrixXd covariance, slopes;
+    if (still.standing) {
+      if (!travels_at_) updateInputNoise();
+      Eigen::MatrixXd travel_slopes, other_slopes;
+      const double count = static_cast<double>(still.averaged);
+      covariance = travels_at_(k, &travel_slopes) / count + others_at_(k, &other_slopes);
+      slopes = travel_slopes / std::sqrt(count) + other_slopes;
+    } else {
+      covariance = inherited_at_(k, &slopes);
+    }
+    shrinkYawNoise(&covariance, &slopes);
+    o.extra_covariance = covariance(o.channels, o.channels);
   } else if (still.standing) {
     if (!travels_at_) updateInputNoise();
     const Eigen::MatrixXd standing =
@@ -249,6 +285,7 @@ void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& stil
   } else {
     covariance = inherited_at_(k, &slopes);
   }
+  if (yaw_ >= 0) shrinkYawNoise(&covariance, &slopes);
   // The inputs not carried (the gyro) stay in the covariance alone.
   Eigen::MatrixXd carried = Eigen::MatrixXd::Zero(slopes.rows(), slopes.cols());
   for (int i : state_inputs_) {
@@ -258,6 +295,17 @@ void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& stil
   o->extra_covariance = covariance(o->channels, o->channels);
   o->input_slopes = carried(o->channels, Eigen::all);
   o->input_correlation = rho;
+}
+
+void RoadFreeStream::shrinkYawNoise(Eigen::MatrixXd* covariance, Eigen::MatrixXd* slopes) const {
+  // The gyro's noise is independent from sample to sample (no lag-1 term):
+  // its share is a a' + b b', a and b its slopes at this sample and the one before.
+  const Eigen::Index n = static_cast<Eigen::Index>(input_channels_.size());
+  const Eigen::VectorXd a = slopes->col(yaw_), b = slopes->col(n + yaw_);
+  *covariance += (yaw_shrink_ - 1.0) * a * a.transpose() +
+                 (yaw_shrink_before_ - 1.0) * b * b.transpose();
+  slopes->col(yaw_) *= std::sqrt(yaw_shrink_);
+  slopes->col(n + yaw_) *= std::sqrt(yaw_shrink_before_);
 }
 
 void RoadFreeStream::blendTravel(Blend& b, double t, std::vector<double>* in) const {

@@ -103,6 +103,10 @@ class RoadFreeStream {
   // filter.horizon.input_noise: state: this sample's inherited covariance
   // and its inputs' slopes and lag-1 correlations (Measurement::input_slopes).
   void inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o);
+  // gyro_z read as an input (a_y = V psi'): its noise's share of a sample's
+  // inherited covariance and input slopes, at the shrunk reading's error
+  // (sqrt(s) of the raw std, at this sample and at the one before).
+  void shrinkYawNoise(Eigen::MatrixXd* covariance, Eigen::MatrixXd* slopes) const;
 
   std::string source_;
   std::shared_ptr<ReadingInputs> inputs_;
@@ -133,6 +137,18 @@ class RoadFreeStream {
   // sample's measurement); whether the sample before was standing.
   std::vector<int> state_inputs_;
   bool was_standing_ = false;
+  // The yaw rate gyro_z when it is an input (a_y = V psi', docs/method.md):
+  // its reading r is shrunk to s r, s = max(0, 1 - sigma^2 / m), m the mean
+  // square of its readings over kYawWindow (exponentially weighted), sigma its
+  // noise std: the yaw rate's mean given the reading under a zero-mean prior
+  // of the drive's own spread (empirical Bayes). Its error, of variance
+  // s sigma^2, is then uncorrelated with the rate used, so a parameter that
+  // scales a_y's effect is not pulled towards damping the gyro's noise (on a
+  // straight drive, noise alone: s near 0). -1: gyro_z is not an input.
+  static constexpr double kYawWindow = 0.5;  // s
+  int yaw_ = -1;
+  double yaw_square_ = std::numeric_limits<double>::quiet_NaN(), yaw_time_ = 0.0;
+  double yaw_shrink_ = 1.0, yaw_shrink_before_ = 1.0;
 };
 
 // A whole record through the stream: the model and the outputs. The samples

@@ -494,7 +494,8 @@ std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd
     const double largest = params.cwiseAbs().maxCoeff();
     if ((params[at.added_mass] >= 0.0) & (largest < 1e150) &
         (std::abs(params[at.body_cg_offset]) <= 0.5 * params[at.bar_length])) {
-      return "";
+      // Heights: the point needs a stable static equilibrium too.
+      return rollPlaneEquilibriumRefusal(params);
     }
   }
   const std::string why = table.violation(params);
@@ -523,7 +524,7 @@ std::string RollPlaneModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd
     return outOfDomain(names[at.added_mass], mass,
                        "makes the inertia about the combined centre <= 0");
   }
-  return "";
+  return rollPlaneEquilibriumRefusal(params);
 }
 
 // Each point's values are read by row from its column of params (no copy).

@@ -102,6 +102,11 @@ StaticEquilibrium solveStaticEquilibrium(const VehicleParameters& p);
 // result identical to the single solve; the Newton iterations of all springs
 // advance together, which is faster).
 std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& params);
+// "" when the point (heights above the mount plane) has a stable static
+// equilibrium, else why not: the tyres' or the springs' roll stiffness does
+// not carry the elevated masses' moment g S (docs/models.md). Closed form
+// except near that edge, where it solves the point.
+std::string rollPlaneEquilibriumRefusal(const Eigen::Ref<const Eigen::VectorXd>& params);
 
 struct RollPlaneReadings;
 

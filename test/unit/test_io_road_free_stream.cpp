@@ -219,6 +219,66 @@ TEST(RoadFreeStream, TravelBlendFollowsAnAgreeingRateAndCutsTheNoise) {
   EXPECT_NEAR(sum / n, 0.02, 3.0 * assumed / std::sqrt(n / 20.0));  // the sag kept
 }
 
+// gyro_z and speed as inputs (a_y = V psi'): the yaw rate is shrunk by its
+// spread over the last half second. Straight, noise alone, it is near 0 and
+// a_y's inherited variance with it (the gyro's noise is no longer a signal
+// that a parameter could damp); in a turn it is the reading itself and the
+// variance the gyro's whole noise. Without gyro_z nothing is shrunk.
+TEST(RoadFreeStream, YawRateShrunkToItsSpread) {
+  YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+  root["vehicle"]["body_cg_height"] = 0.25;
+  root["vehicle"]["added_mass_height"] = 0.4;
+  root["vehicle"]["imu_height"] = 0.1;
+  root["vehicle"]["anti_roll_bar"] = 8000.0;
+  YAML::Node m = root["measurement"];
+  m["channels"].push_back("speed");
+  m["channels"].push_back("gyro_z");
+  for (const char* key : {"sensor_std", "r_relative", "noise_relative"}) {
+    m[key].push_back(std::string(key) == "sensor_std" ? 0.05 : 0.0);
+    m[key].push_back(std::string(key) == "sensor_std" ? 0.002 : 0.0);
+  }
+  root["truth"]["sensor"]["noise_floor"].push_back(0.05);
+  root["truth"]["sensor"]["noise_floor"].push_back(0.002);
+  m["standstill"] = 0.0;
+  const EstimatorConfig c = parseConfig(root, "vehicle_imu_turns.yaml");
+  const std::vector<std::string> inputs = RoadFreeStream::inputsFor(c);
+  ASSERT_EQ(inputs.back(), "gyro_z");
+  const int yaw = static_cast<int>(inputs.size()) - 1;
+  RoadFreeStream stream(c, inputs);
+  std::mt19937_64 rng(5);
+  std::normal_distribution<double> normal(0.0, 0.002);
+  const double dt = 0.005;
+  double straight_sq = 0.0, straight_var = 0.0, turn_worst = 0.0, turn_var = 0.0;
+  int straight = 0, turn = 0;
+  for (int k = 1; k <= 1600; ++k) {
+    const double t = k * dt, rate = k > 800 ? 0.25 : 0.0;  // a 3.5 m/s^2 turn at 14 m/s
+    Measurement in;
+    in.time = t;
+    in.channels = {0, 1, 2, 3, 4, 5, 6, 7, 8};
+    in.values = (Eigen::VectorXd(9) << -0.037, -0.037, 0.0, 0.0, 0.0, 9.81, 0.0, 14.0,
+                 rate + normal(rng)).finished();
+    Measurement out;
+    ASSERT_EQ(stream.add(in, &out), "");
+    std::vector<double> used(inputs.size());
+    stream.inputs().at(t, used.data());
+    if (k > 200 && k <= 800) {
+      straight_sq += used[static_cast<std::size_t>(yaw)] * used[static_cast<std::size_t>(yaw)];
+      straight_var += out.extra_covariance(0, 0);
+      ++straight;
+    } else if (k > 1000) {
+      turn_worst = std::max(turn_worst, std::abs(used[static_cast<std::size_t>(yaw)] /
+                                                 in.values[8] - 1.0));
+      turn_var += out.extra_covariance(0, 0);
+      ++turn;
+    }
+  }
+  EXPECT_LT(std::sqrt(straight_sq / straight), 0.25 * 0.002);  // the raw noise: 0.002
+  EXPECT_LT(turn_worst, 1e-3);
+  // accel_y's inherited variance: the gyro's share (0.002 x 14 m/s)^2 (1 - z_I S / J)^2
+  // about 5e-4 in the turn, nearly none of it straight.
+  EXPECT_GT(turn_var / turn - straight_var / straight, 2e-4);
+}
+
 // measurement.standstill: noise alone (a vehicle standing) is recognised
 // after the window, the travel is then the mean of its readings since the
 // window began and the rate 0, and the covariance the predictions inherit
