@@ -108,6 +108,7 @@ void EstimatorDiagnostics::reportInput(diagnostic_updater::DiagnosticStatusWrapp
   s.add("max queue depth", b.max_queue_depth);
   s.add("queue overflow (dropped)", b.queue_overflow);
   s.add("parameter_pdf being drawn", b.pdf_queue);
+  s.add("parameter_pdf dropped (queue full)", b.pdf_dropped);
   s.add("deferred re-run swap after sample", b.rerun_pending_swap);
   s.add("deferred re-runs waited for", b.late_swaps);
   s.add("samples received", c.samples_received);

@@ -90,6 +90,7 @@ struct NodeBacklog {
   std::size_t max_queue_depth = 0;
   std::uint64_t queue_overflow = 0;  // dropped: more than node.queue_size waiting
   std::size_t pdf_queue = 0;         // parameter_pdf messages being drawn
+  std::uint64_t pdf_dropped = 0;     // not drawn: newer ones came while the queue was full
   int rerun_pending_swap = 0;        // deferred re-run: swap after this sample, 0 = none
   int late_swaps = 0;                // deferred re-runs the filter had to wait for
 };

@@ -499,6 +499,7 @@ void EstimatorRos::onDiagnosticsTimer(const ros::WallTimerEvent&) {
                 ? 0.0
                 : std::max(0.0, (newest_received_ - last_processed_stamp_).toSec());
     b.pdf_queue = pdf_worker_ ? pdf_worker_->queued() : 0;
+    b.pdf_dropped = pdf_worker_ ? pdf_worker_->dropped() : 0;
     b.rerun_pending_swap = run_ ? run_->pendingSwap() : 0;
     b.late_swaps = run_ ? run_->lateSwaps() : 0;
   }

@@ -1,9 +1,17 @@
 #include "pc_ekf/ros/estimator_run_pdfs.h"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/ros/message_conversion.h"
 
 namespace pc_ekf {
+
+namespace {
+constexpr int kNice = 10;  // the PDF worker's nice, relative to the node's
+}  // namespace
 
 ParameterPdf parameterPdf(const ParameterPdfSampler& sampler, const std::vector<std::string>& names,
                           const PdfRequest& r, const ParameterPdfSampler* derived_sampler) {
@@ -54,6 +62,10 @@ void PdfWorker::submit(PdfRequest r) {
   {
     std::lock_guard<std::mutex> lock(mutex_);
     queue_.push_back(std::move(r));
+    while (queue_.size() > kMaxQueued) {
+      queue_.pop_front();
+      ++dropped_;
+    }
   }
   wake_.notify_all();
 }
@@ -73,7 +85,15 @@ std::uint64_t PdfWorker::published() const {
   return published_;
 }
 
+std::uint64_t PdfWorker::dropped() const {
+  std::lock_guard<std::mutex> lock(mutex_);
+  return dropped_;
+}
+
 void PdfWorker::run() {
+  // Below the filter's thread: a PDF is a view of the estimate, the
+  // estimate must keep up with the samples (Linux: nice applies per thread).
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kNice);
   std::unique_lock<std::mutex> lock(mutex_);
   for (;;) {
     wake_.wait(lock, [this] { return stop_ || !queue_.empty(); });

@@ -60,11 +60,16 @@ class PdfWorker {
             std::shared_ptr<const ParameterPdfSampler> derived_sampler = nullptr);
   // Drops what is still queued (shutdown), waits for the message in hand.
   ~PdfWorker();
+  // Queues r; beyond kMaxQueued requests waiting, the oldest waiting one is
+  // dropped (counted): when the node runs faster than PDFs are drawn, the
+  // newest are published and memory stays bounded.
   void submit(PdfRequest r);
+  static constexpr std::size_t kMaxQueued = 64;
   // Waits until every submitted request is published.
   void flush();
   std::size_t queued() const;
   std::uint64_t published() const;
+  std::uint64_t dropped() const;
 
  private:
   void run();
@@ -76,7 +81,7 @@ class PdfWorker {
   std::condition_variable wake_, idle_;
   std::deque<PdfRequest> queue_;  // guarded by mutex_
   bool busy_ = false, stop_ = false;
-  std::uint64_t published_ = 0;
+  std::uint64_t published_ = 0, dropped_ = 0;
   std::thread thread_;
 };
 
