@@ -233,15 +233,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     inputSlopes(k, still, &o);
   } else if (yaw_ >= 0) {
     Eigen::MatrixXd covariance, slopes;
-    if (still.standing) {
-      if (!travels_at_) updateInputNoise();
-      Eigen::MatrixXd travel_slopes, other_slopes;
-      const double count = static_cast<double>(still.averaged);
-      covariance = travels_at_(k, &travel_slopes) / count + others_at_(k, &other_slopes);
-      slopes = travel_slopes / std::sqrt(count) + other_slopes;
-    } else {
-      covariance = inherited_at_(k, &slopes);
-    }
+    inheritedWithSlopes(k, still, &covariance, &slopes);
     shrinkYawNoise(&covariance, &slopes);
     o.extra_covariance = covariance(o.channels, o.channels);
   } else if (still.standing) {
@@ -254,6 +246,19 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   }
   *out = std::move(o);
   return "";
+}
+
+void RoadFreeStream::inheritedWithSlopes(std::size_t k, const Standstill::Decision& still,
+                                         Eigen::MatrixXd* covariance, Eigen::MatrixXd* slopes) {
+  if (!still.standing) {
+    *covariance = inherited_at_(k, slopes);
+    return;
+  }
+  if (!travels_at_) updateInputNoise();
+  Eigen::MatrixXd travel_slopes, other_slopes;
+  const double count = static_cast<double>(still.averaged);
+  *covariance = travels_at_(k, &travel_slopes) / count + others_at_(k, &other_slopes);
+  *slopes = travel_slopes / std::sqrt(count) + other_slopes;
 }
 
 void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o) {
@@ -276,15 +281,7 @@ void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& stil
   for (int i : travel_inputs_) inputs_->setNoiseCorrelation(i, rho[i]);
   was_standing_ = still.standing;
   Eigen::MatrixXd covariance, slopes;
-  if (still.standing) {
-    if (!travels_at_) updateInputNoise();
-    Eigen::MatrixXd travel_slopes, other_slopes;
-    const double count = static_cast<double>(still.averaged);
-    covariance = travels_at_(k, &travel_slopes) / count + others_at_(k, &other_slopes);
-    slopes = travel_slopes / std::sqrt(count) + other_slopes;
-  } else {
-    covariance = inherited_at_(k, &slopes);
-  }
+  inheritedWithSlopes(k, still, &covariance, &slopes);
   if (yaw_ >= 0) shrinkYawNoise(&covariance, &slopes);
   // The inputs not carried (the gyro) stay in the covariance alone.
   Eigen::MatrixXd carried = Eigen::MatrixXd::Zero(slopes.rows(), slopes.cols());

@@ -103,6 +103,10 @@ class RoadFreeStream {
   // filter.horizon.input_noise: state: this sample's inherited covariance
   // and its inputs' slopes and lag-1 correlations (Measurement::input_slopes).
   void inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o);
+  // Sample k's inherited covariance and its inputs' slopes (a stop's: the
+  // travels' over the readings averaged, no rate).
+  void inheritedWithSlopes(std::size_t k, const Standstill::Decision& still,
+                           Eigen::MatrixXd* covariance, Eigen::MatrixXd* slopes);
   // gyro_z read as an input (a_y = V psi'): its noise's share of a sample's
   // inherited covariance and input slopes, at the shrunk reading's error
   // (sqrt(s) of the raw std, at this sample and at the one before).
