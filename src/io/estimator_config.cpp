@@ -277,28 +277,26 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
     f.fail("support", "'" + support + "'", "damp or ignore");
   }
   const std::size_t n = c.uncertain.size(), loads = c.loadCount();
-  std::vector<double> drift;
-  f.numberList("drift", drift, 0, n);
-  if (!drift.empty() && drift.size() != n && drift.size() != loads) {
-    f.fail("drift", "a list of " + std::to_string(drift.size()),
-           "one random-walk intensity per uncertain parameter (" + std::to_string(loads) +
-               (n != loads ? ", or " + std::to_string(n) + " with the tolerances" : std::string()) +
-               ")");
-  }
+  // One number per uncertain parameter: the loads', or all with the tolerances.
+  const auto perParameter = [&](const std::string& key, const std::string& each) {
+    std::vector<double> v;
+    f.numberList(key, v, 0, n);
+    if (!v.empty() && v.size() != n && v.size() != loads) {
+      f.fail(key, "a list of " + std::to_string(v.size()),
+             each + " per uncertain parameter (" + std::to_string(loads) +
+                 (n != loads ? ", or " + std::to_string(n) + " with the tolerances" : std::string()) +
+                 ")");
+    }
+    return v;
+  };
+  std::vector<double> drift = perParameter("drift", "one random-walk intensity");
   drift.resize(drift.empty() ? 0 : n, 0.0);  // tolerances: vehicle values do not drift
   for (double d : drift) {
     if (!(d >= 0.0) || !std::isfinite(d)) f.fail("drift", std::to_string(d), "intensities >= 0");
   }
   // The same as fractions of each parameter's nominal (a vehicle_file's
   // values scale them), added in quadrature.
-  std::vector<double> relative;
-  f.numberList("drift_relative", relative, 0, n);
-  if (!relative.empty() && relative.size() != n && relative.size() != loads) {
-    f.fail("drift_relative", "a list of " + std::to_string(relative.size()),
-           "one fraction per uncertain parameter (" + std::to_string(loads) +
-               (n != loads ? ", or " + std::to_string(n) + " with the tolerances" : std::string()) +
-               ")");
-  }
+  const std::vector<double> relative = perParameter("drift_relative", "one fraction");
   for (std::size_t i = 0; i < relative.size(); ++i) {
     const double r = relative[i];
     if (!(r >= 0.0) || !std::isfinite(r)) f.fail("drift_relative", std::to_string(r), "fractions >= 0");
