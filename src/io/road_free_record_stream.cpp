@@ -214,6 +214,7 @@ std::optional<CheckedRoadFreeStream> checkRoadFreeStream(const EstimatorConfig& 
   CheckedRoadFreeStream r;
   r.dropped = verdict.dropped;
   r.warning = verdict.warning;
+  r.unread = RoadFreeStream::unreadMotionWarning(c, readFrom(0));
   r.samples = count - verdict.dropped;
   // runRoadFreeOneStep checks the samples kept once more, with their inputs.
   r.inputs = RoadFreeStream::inputsFor(c, readFrom(r.dropped));

@@ -23,6 +23,7 @@ struct CheckedRoadFreeStream {
   std::size_t samples = 0;  // after the dropped ones
   std::size_t dropped = 0;  // leading samples before every input had been read
   std::string warning;      // droppedWarning's ("" when none dropped)
+  std::string unread;       // RoadFreeStream::unreadMotionWarning's ("" when none)
   std::vector<std::string> inputs;  // RoadFreeStream::inputsFor the samples kept
   // The samples as the checks read them, in a temporary file the run reads
   // back (null: the record is read again).

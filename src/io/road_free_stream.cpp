@@ -27,9 +27,26 @@ std::vector<std::string> RoadFreeStream::inputsFor(const EstimatorConfig& c,
   for (const std::string& o : wanted.optional) {
     const int ch = c.model_type->description().channelIndex(o);
     if (std::find(selected.begin(), selected.end(), ch) == selected.end()) continue;
-    if (read(ch)) names.push_back(o);
+    const bool motion = std::find(wanted.zero_until_read.begin(), wanted.zero_until_read.end(),
+                                  o) != wanted.zero_until_read.end();
+    if (motion || read(ch)) names.push_back(o);
   }
   return names;
+}
+
+std::string RoadFreeStream::unreadMotionWarning(const EstimatorConfig& c,
+                                                const std::function<bool(int)>& read) {
+  const std::vector<int> selected = channelIndices(c);
+  std::string unread;
+  for (const std::string& o : c.model_type->roadFreeInputs().zero_until_read) {
+    const int ch = c.model_type->description().channelIndex(o);
+    if (std::find(selected.begin(), selected.end(), ch) == selected.end() || read(ch)) continue;
+    unread += (unread.empty() ? "'" : ", '") + o + "'";
+  }
+  if (unread.empty()) return "";
+  return "measurement.channels selects " + unread +
+         ", which the record never reads: taken as 0 throughout (no lateral acceleration: "
+         "a turn is not explained and is flagged)";
 }
 
 namespace {
@@ -41,6 +58,32 @@ std::vector<int> inputsStarting(const std::vector<std::string>& inputs, char fir
     if (!inputs[i].empty() && inputs[i][0] == first) out.push_back(static_cast<int>(i));
   }
   return out;
+}
+
+// The places in `inputs` of the model's zero_until_read inputs.
+std::vector<int> motionPlaces(const ModelType& type, const std::vector<std::string>& inputs) {
+  std::vector<int> places;
+  for (const std::string& name : type.roadFreeInputs().zero_until_read) {
+    const auto at = std::find(inputs.begin(), inputs.end(), name);
+    if (at != inputs.end()) places.push_back(static_cast<int>(at - inputs.begin()));
+  }
+  return places;
+}
+
+// Those not read yet (`read`, per place) set to 0 in `in`; returns the
+// flags after this sample (kept by the caller only if it is taken).
+std::vector<bool> zeroUnreadMotion(const std::vector<int>& places, const std::vector<bool>& read,
+                                   std::vector<double>* in) {
+  std::vector<bool> now = read;
+  for (std::size_t i = 0; i < places.size(); ++i) {
+    double& v = (*in)[static_cast<std::size_t>(places[i])];
+    if (std::isfinite(v)) {
+      now[i] = true;
+    } else if (!read[i]) {
+      v = 0.0;
+    }
+  }
+  return now;
 }
 
 }  // namespace
@@ -114,6 +157,8 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
   }
   observe_interval_ = !(interval > 0.0) && !blends_.empty();
   accel_z_ = type.description().channelIndex("accel_z");
+  zero_until_read_ = motionPlaces(type, inputs);
+  motion_read_.assign(zero_until_read_.size(), false);
   const auto yaw = std::find(inputs.begin(), inputs.end(), "gyro_z");
   if (yaw != inputs.end()) yaw_ = static_cast<int>(yaw - inputs.begin());
   if (c.safeguards.horizon.window > 0.0 && c.safeguards.horizon.input_noise_states) {
@@ -175,6 +220,9 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     const auto it = std::find(input_channels_.begin(), input_channels_.end(), m.channels[j]);
     if (it != input_channels_.end()) in[it - input_channels_.begin()] = m.values[static_cast<Eigen::Index>(j)];
   }
+  // The vehicle's horizontal motion not read yet: 0 (ReadingInputs holds
+  // the last reading once there is one).
+  std::vector<bool> motion_read = zeroUnreadMotion(zero_until_read_, motion_read_, &in);
   // A stop: the travels their means since it began, the rates 0; the blend
   // holds the mean. The blends' and the stop's next state, kept only if the
   // sample is taken (the scratch's capacity is reused).
@@ -216,6 +264,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
     yaw_shrink_ = yaw_shrink;
   }
   blends_.swap(blend_next_);
+  motion_read_.swap(motion_read);
   standstill_.commit(m.time, raw_, still);
   ++samples_;
   observeInterval(m.time);
@@ -341,7 +390,12 @@ void RoadFreeStream::updateInputNoise() {
 
 bool RoadFreeStream::waitingForInputs(const Measurement& m) const {
   if (!inputs_->empty()) return false;
-  for (int ch : input_channels_) {
+  for (std::size_t i = 0; i < input_channels_.size(); ++i) {
+    const int ch = input_channels_[i];
+    if (std::find(zero_until_read_.begin(), zero_until_read_.end(), static_cast<int>(i)) !=
+        zero_until_read_.end()) {
+      continue;  // 0 until read
+    }
     const auto it = std::find(m.channels.begin(), m.channels.end(), ch);
     if (it == m.channels.end() || std::isnan(m.values[static_cast<Eigen::Index>(it - m.channels.begin())])) {
       return true;
@@ -402,7 +456,8 @@ RoadFreeCheck checkRoadFreeRecord(const EstimatorConfig& c, const MeasurementSer
 // reading finite): the raw inputs through inputs of their own, forgotten as
 // they go.
 RoadFreeChecker::RoadFreeChecker(const EstimatorConfig& c, const std::vector<std::string>& inputs)
-    : c_(c), inputs_(inputs), in_(inputs.size()) {
+    : c_(c), inputs_(inputs), in_(inputs.size()), motion_(motionPlaces(*c.model_type, inputs)),
+      motion_read_(motion_.size(), false) {
   for (const std::string& name : inputs) {
     channels_.push_back(c.model_type->description().channelIndex(name));
   }
@@ -417,6 +472,7 @@ void RoadFreeChecker::add(const Measurement& m) {
     if (it == channels_.end()) continue;
     in_[static_cast<std::size_t>(it - channels_.begin())] = m.values[static_cast<Eigen::Index>(j)];
   }
+  std::vector<bool> motion_read = zeroUnreadMotion(motion_, motion_read_, &in_);
   const bool waiting = std::isfinite(m.time) && check_.dropped == k &&
                        std::any_of(in_.begin(), in_.end(), [](double v) { return std::isnan(v); });
   const std::string problem = inputs_.append(m.time, in_.data());
@@ -430,6 +486,7 @@ void RoadFreeChecker::add(const Measurement& m) {
     refusal_ = roadFreeRefusal(c_, k, m, problem);
     return;
   }
+  motion_read_.swap(motion_read);
   inputs_.forget(m.time, -std::numeric_limits<double>::infinity());
 }
 

@@ -44,9 +44,15 @@ class RoadFreeStream {
   static std::vector<std::string> inputsFor(const EstimatorConfig& c,
                                             const MeasurementSeries* record = nullptr);
   // The same for a record read as a stream: `read(channel)` whether the
-  // record reads that model channel anywhere.
+  // record reads that model channel anywhere. A selected input of the
+  // vehicle's horizontal motion (ModelType::RoadFreeInputs::zero_until_read:
+  // speed, yaw rate) is an input whether read or not: 0 until first read.
   static std::vector<std::string> inputsFor(const EstimatorConfig& c,
                                             const std::function<bool(int)>& read);
+  // "" or a warning naming the selected zero_until_read inputs that `read`
+  // says the record never reads (taken as 0 throughout: a_y = 0).
+  static std::string unreadMotionWarning(const EstimatorConfig& c,
+                                         const std::function<bool(int)>& read);
 
   // Built on the inputs appended so far (they grow under it).
   const std::shared_ptr<const MechanicalModel>& model() const { return model_; }
@@ -151,6 +157,9 @@ class RoadFreeStream {
   // straight drive, noise alone: s near 0). -1: gyro_z is not an input.
   static constexpr double kYawWindow = 0.5;  // s
   int yaw_ = -1;
+  // zero_until_read inputs (their places) and whether each has been read.
+  std::vector<int> zero_until_read_;
+  std::vector<bool> motion_read_;
   double yaw_square_ = std::numeric_limits<double>::quiet_NaN(), yaw_time_ = 0.0;
   double yaw_shrink_ = 1.0, yaw_shrink_before_ = 1.0;
 };
@@ -192,6 +201,8 @@ class RoadFreeChecker {
   std::vector<int> channels_;
   ReadingInputs inputs_;
   std::vector<double> in_;
+  std::vector<int> motion_;  // RoadFreeStream's zero_until_read_, motion_read_
+  std::vector<bool> motion_read_;
   std::size_t k_ = 0;
   RoadFreeCheck check_;
   std::string first_problem_, refusal_;

@@ -29,7 +29,8 @@ class FullCarType : public ModelType {
     return std::make_shared<FullCarRoadFreeModel>(FullCarParameters::from(p), std::move(in), zero);
   }
   RoadFreeInputs roadFreeInputs() const override {
-    return {{"u_fl", "u_fr", "u_rl", "u_rr", "v_fl", "v_fr", "v_rl", "v_rr"}, {"gyro_x", "gyro_y", "speed", "gyro_z", "accel_x"}};
+    return {{"u_fl", "u_fr", "u_rl", "u_rr", "v_fl", "v_fr", "v_rl", "v_rr"}, {"gyro_x", "gyro_y", "speed", "gyro_z", "accel_x"},
+            {"speed", "gyro_z"}};
   }
   // Front wheels on the tracks, rear wheels a wheelbase behind them.
   std::shared_ptr<const ContactRoad> drivenProfile(std::shared_ptr<const TrackProfile> profile,

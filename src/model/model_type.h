@@ -54,6 +54,10 @@ class ModelType {
       ZeroConvention zero) const;
   struct RoadFreeInputs {
     std::vector<std::string> required, optional;
+    // Optional inputs of the vehicle's horizontal motion (speed, yaw rate):
+    // an input whenever selected, 0 (straight, steady) until first read, so
+    // that a stream without odometry, or odometry that starts late, is read.
+    std::vector<std::string> zero_until_read;
   };
   virtual RoadFreeInputs roadFreeInputs() const { return {}; }
   // A road by distance (left and right tracks) driven at `speed` m/s under

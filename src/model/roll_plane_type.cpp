@@ -30,7 +30,9 @@ class RollPlaneType : public ModelType {
   }
   RoadFreeInputs roadFreeInputs() const override {
     const std::vector<std::string>& ch = rollPlaneChannels();  // u1 u2 v1 v2, gyro_x speed gyro_z
-    return {{ch.begin(), ch.begin() + RollPlaneModel::kSuspensionChannels}, {ch[6], ch[7], ch[8]}};
+    return {{ch.begin(), ch.begin() + RollPlaneModel::kSuspensionChannels},
+            {ch[6], ch[7], ch[8]},
+            {ch[7], ch[8]}};
   }
   std::string equilibriumSummary(const ModelParameters& laws,
                                  const Eigen::VectorXd& values) const override {

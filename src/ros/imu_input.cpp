@@ -89,6 +89,7 @@ std::string ImuInput::addConversion(ImuConversion c) {
 }
 
 void ImuInput::addSample(const ros::Time& stamp, const Measurement& m, double arrival) {
+  if (!(first_arrival_ >= 0.0)) first_arrival_ = arrival;
   pending_.push_back({stamp, m, arrival});
   stats_.waiting = pending_.size();
   stats_.max_waiting = std::max(stats_.max_waiting, pending_.size());
@@ -137,6 +138,14 @@ std::vector<ImuReleased> ImuInput::release(double now) {
       stats_.max_abs_offset = std::max(stats_.max_abs_offset, std::abs(stats_.last_offset));
       continue;
     }
+    // odom: no message node.road_wait_timeout after the first sample (a
+    // vehicle without odometry): a sample goes on at once, not after a wait
+    // of its own; the speed is 0 until read (road_free_stream.h).
+    if (speed_channel_ >= 0 && stats_.received == 0 && now - first_arrival_ >= timeout_) {
+      ++stats_.samples_without_imu["no_message_yet"];
+      out.push_back(alignFront(false));
+      continue;
+    }
     // As the road's wait: time spent computing with IMU messages queued does
     // not count (the wait runs from the sample's arrival and the last message).
     const bool expired = now - pending_.front().arrival >= timeout_ &&
@@ -156,6 +165,7 @@ void ImuInput::reset() {
   // first sample could arrive before its first IMU message and be judged
   // against the old ones).
   pending_.clear();
+  first_arrival_ = -1.0;
   stats_.waiting = 0;
   aligner_.reset();
   have_last_ = false;

@@ -39,7 +39,9 @@ struct ImuInputStats {
   std::uint64_t samples_aligned = 0;
   // Samples that went on without IMU channels: wait_expired, queue_full,
   // gap (IMU messages more than node.imu_max_gap apart: the IMU stopped),
-  // no_bracket (no IMU message before the sample).
+  // no_bracket (no IMU message before the sample); odom only: no_message_yet
+  // (no odom message node.road_wait_timeout after the first sample: the
+  // sample goes on at once).
   std::map<std::string, std::uint64_t> samples_without_imu;
   double rate = 0.0;               // Hz, from a running mean of the stamp intervals
   std::uint64_t rate_changes = 0;  // intervals outside [0.5, 2] x the running mean
@@ -89,6 +91,7 @@ class ImuInput {
   std::size_t max_pending_;
   std::int64_t jump_tolerance_ns_;
   std::deque<ImuReleased> pending_;
+  double first_arrival_ = -1.0;  // wall-clock s of the first sample (-1: none yet)
   std::int64_t last_stamp_ns_ = 0;
   bool have_last_ = false;
   double mean_interval_ = 0.0;

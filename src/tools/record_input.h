@@ -3,6 +3,7 @@
 // data the config describes.
 #pragma once
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -85,6 +86,18 @@ inline RecordInput loadRecord(const EstimatorConfig& config, const std::string& 
   if (!zero.empty()) {
     throw ConfigError((bag.empty() ? csv : bag) + ": " + zero);
   }
+  if (road_free) {
+    const std::string unread = RoadFreeStream::unreadMotionWarning(config, [&](int ch) {
+      return std::any_of(r.series.begin(), r.series.end(), [ch](const Measurement& m) {
+        return std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end();
+      });
+    });
+    if (!unread.empty()) {
+      const std::string& name = !bag.empty() ? bag : !csv.empty() ? csv : config.source;
+      std::cerr << "[road-free] " << name << ": " << unread << "\n";
+      r.warnings.push_back(unread);
+    }
+  }
   if (road_free && split_road_free) {
     RoadFreeRecord split = roadFreeRecord(config, r.series, r.interval);
     r.model = split.model;
@@ -143,9 +156,10 @@ inline std::optional<StreamedRecord> streamRoadFreeRecord(const EstimatorConfig&
   });
   if (!checked) return std::nullopt;
   r.checked = *checked;
-  if (!checked->warning.empty()) {
-    std::cerr << "[road-free] " << name << ": " << checked->warning << "\n";
-    r.warnings.push_back(checked->warning);
+  for (const std::string* w : {&checked->warning, &checked->unread}) {
+    if (w->empty()) continue;
+    std::cerr << "[road-free] " << name << ": " << *w << "\n";
+    r.warnings.push_back(*w);
   }
   return r;
 }

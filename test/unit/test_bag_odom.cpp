@@ -121,6 +121,33 @@ TEST(OdomInput, SamplesWaitForTheOdometryAndGoOnWithoutItWhenItStops) {
   EXPECT_EQ(input.stats().samples_without_imu.at("wait_expired"), 1u);
 }
 
+// A vehicle without odometry (or odometry that starts late): the first
+// samples wait node.road_wait_timeout for it as above; when none has come
+// by then, a sample goes on at once; once odometry comes, samples wait again.
+TEST(OdomInput, WithoutOdometrySamplesGoOnAtOnce) {
+  EstimatorConfig config = turnsWithSpeedAndYawRate();
+  config.node.road_wait_timeout = 0.5;
+  ImuInput input(config, AlignedStream::kOdom);
+  const ros::Time t0(100.0);
+  for (int k = 1; k <= 3; ++k) {
+    input.addSample(t0 + ros::Duration(0.005 * k), suspension(0.005 * k, 1e-3), 0.1 * k);
+  }
+  EXPECT_TRUE(input.release(0.4).empty());  // the first wait: odometry may be late
+  std::vector<ImuReleased> out = input.release(0.6);
+  ASSERT_EQ(out.size(), 3u);
+  for (const ImuReleased& s : out) EXPECT_EQ(s.measurement.channels, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(input.stats().samples_without_imu.at("no_message_yet"), 3u);
+  input.addSample(t0 + ros::Duration(0.020), suspension(0.020, 1e-3), 0.7);
+  EXPECT_EQ(input.release(0.7).size(), 1u);  // no wait of its own
+  input.addOdom(odom(0.026, 10.0), 0.8);
+  input.addSample(t0 + ros::Duration(0.030), suspension(0.030, 1e-3), 0.8);
+  EXPECT_TRUE(input.release(0.8).empty());  // now it waits for odometry at or after 30 ms
+  input.addOdom(odom(0.034, 10.0), 0.8);
+  out = input.release(0.8);
+  ASSERT_EQ(out.size(), 1u);
+  EXPECT_EQ(out[0].measurement.channels, (std::vector<int>{0, 1, 2, 3, kSpeed}));
+}
+
 TEST(BagOdom, SpeedAndYawRateWrittenAndReadBackAtTheJointStatesStamps) {
   const std::string path =
       (std::filesystem::temp_directory_path() / "pc_ekf_test_bag_odom.bag").string();

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <yaml-cpp/yaml.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstring>
@@ -224,7 +225,9 @@ TEST(RoadFreeStream, TravelBlendFollowsAnAgreeingRateAndCutsTheNoise) {
 // a_y's inherited variance with it (the gyro's noise is no longer a signal
 // that a parameter could damp); in a turn it is the reading itself and the
 // variance the gyro's whole noise. Without gyro_z nothing is shrunk.
-TEST(RoadFreeStream, YawRateShrunkToItsSpread) {
+// vehicle_imu.yaml with heights, a bar and the vehicle's horizontal motion
+// (speed, gyro_z) as inputs.
+EstimatorConfig turnsConfig() {
   YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
   root["vehicle"]["body_cg_height"] = 0.25;
   root["vehicle"]["added_mass_height"] = 0.4;
@@ -240,7 +243,11 @@ TEST(RoadFreeStream, YawRateShrunkToItsSpread) {
   root["truth"]["sensor"]["noise_floor"].push_back(0.05);
   root["truth"]["sensor"]["noise_floor"].push_back(0.002);
   m["standstill"] = 0.0;
-  const EstimatorConfig c = parseConfig(root, "vehicle_imu_turns.yaml");
+  return parseConfig(root, "vehicle_imu_turns.yaml");
+}
+
+TEST(RoadFreeStream, YawRateShrunkToItsSpread) {
+  const EstimatorConfig c = turnsConfig();
   const std::vector<std::string> inputs = RoadFreeStream::inputsFor(c);
   ASSERT_EQ(inputs.back(), "gyro_z");
   const int yaw = static_cast<int>(inputs.size()) - 1;
@@ -277,6 +284,68 @@ TEST(RoadFreeStream, YawRateShrunkToItsSpread) {
   // accel_y's inherited variance: the gyro's share (0.002 x 14 m/s)^2 (1 - z_I S / J)^2
   // about 5e-4 in the turn, nearly none of it straight.
   EXPECT_GT(turn_var / turn - straight_var / straight, 2e-4);
+}
+
+// The speed selected but not in the record (no odometry), or from its
+// 50th sample on (odometry that starts late): read as 0 until read, as a
+// record whose speed reads 0; no sample dropped, and the record that never
+// reads it is named in a warning.
+TEST(RoadFreeStream, SpeedNotReadYetIsZero) {
+  EstimatorConfig c = turnsConfig();
+  c.sampling.samples = 120;
+  c.sampling.duration = 0.6;
+  // speed (channel 7) and gyro_z: inputs, read or not.
+  const std::vector<std::string> inputs = RoadFreeStream::inputsFor(c, [](int ch) { return ch < 7; });
+  ASSERT_EQ(inputs, RoadFreeStream::inputsFor(c));
+  const MeasurementSeries full = synthesizeFromConfig(c, *truthOnItsRoad(c), 7);
+  MeasurementSeries none = full, zero = full, late = full;
+  for (std::size_t k = 0; k < full.size(); ++k) {
+    none[k] = onlyChannels(full[k], {0, 1, 2, 3, 4, 5, 6, 8});
+    zero[k].values[7] = 0.0;
+    if (k < 50) late[k] = none[k];
+  }
+  const RoadFreeRecord a = roadFreeRecord(c, none), b = roadFreeRecord(c, zero),
+                       d = roadFreeRecord(c, late);
+  EXPECT_EQ(a.dropped, 0u);
+  EXPECT_EQ(d.dropped, 0u);
+  EXPECT_EQ(checkRoadFreeRecord(c, none).dropped, 0u);  // estimate_offline's check agrees
+  EXPECT_EQ(checkRoadFreeRecord(c, late).dropped, 0u);
+  ASSERT_EQ(a.outputs.size(), full.size());
+  ASSERT_EQ(d.outputs.size(), full.size());
+  for (std::size_t k = 0; k < full.size(); ++k) {
+    EXPECT_EQ(a.outputs[k].values, b.outputs[k].values) << k;
+    EXPECT_EQ(a.outputs[k].extra_covariance, b.outputs[k].extra_covariance) << k;
+    if (k < 50) {
+      EXPECT_EQ(d.outputs[k].extra_covariance, b.outputs[k].extra_covariance) << k;
+    }
+  }
+  // From the 50th sample on the late record reads the speed: it is no
+  // longer the zero record's (its inputs' noise weighs the turn's a_y).
+  double differs = 0.0;
+  for (std::size_t k = 60; k < full.size(); ++k) {
+    differs = std::max(differs, (d.outputs[k].extra_covariance - b.outputs[k].extra_covariance)
+                                    .cwiseAbs().maxCoeff());
+  }
+  EXPECT_GT(differs, 0.0);
+  const auto reads = [](const MeasurementSeries& r) {
+    return [&r](int ch) {
+      for (const Measurement& m : r) {
+        if (std::find(m.channels.begin(), m.channels.end(), ch) != m.channels.end()) return true;
+      }
+      return false;
+    };
+  };
+  const std::string warning = RoadFreeStream::unreadMotionWarning(c, reads(none));
+  EXPECT_NE(warning.find("'speed'"), std::string::npos) << warning;
+  EXPECT_EQ(warning.find("gyro_z"), std::string::npos) << warning;
+  EXPECT_EQ(RoadFreeStream::unreadMotionWarning(c, reads(late)), "");
+  // The node's way: a stream that never sees the speed takes every sample.
+  RoadFreeStream node(c, RoadFreeStream::inputsFor(c));
+  for (const Measurement& m : none) {
+    Measurement out;
+    EXPECT_FALSE(node.waitingForInputs(m));
+    ASSERT_EQ(node.add(m, &out), "");
+  }
 }
 
 // measurement.standstill: noise alone (a vehicle standing) is recognised
