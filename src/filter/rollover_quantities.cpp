@@ -93,7 +93,7 @@ void projectionRule(const PolynomialBasis& basis, Eigen::MatrixXd* nodes,
   }
   std::vector<OrthonormalFamily> families;
   for (int d = 0; d < basis.dimension(); ++d) families.push_back(basis.family(d));
-  SparseGridRule rule = smolyakRule(families, basis.order() + 2);
+  SparseGridRule rule = smolyakRule(families, basis.order() + 1);
   *nodes = std::move(rule.nodes);
   *weights = std::move(rule.weights);
 }

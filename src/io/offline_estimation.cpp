@@ -116,7 +116,7 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
        sink, r);
   summarise(c, b.mean, b.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler, b.coefficients);
-  summariseDerived(c, prop->mapping(), prop->basis(), b.coefficients, r);
+  summariseDerived(c, prop->mapping(), prop->basis(), b.coefficients, pdf_sampler, r);
   r->integrations = prop->integrations() + long(b.iterations) * prop->design().pointCount();
   r->damped_updates = b.damping < 1.0;
   r->predictive = o.predictive;

@@ -112,7 +112,7 @@ void OneStepRun::finish(std::size_t samples, const std::optional<StepResult>& de
   r->band_nested_fraction = samples == 0 ? 1.0 : double(nested_) / samples;
   summarise(c_, last_.mean, last_.stddev, r);
   r->pdfs = pcPdfs(pdf_sampler_, last_.coefficients);
-  summariseDerived(c_, prop_->mapping(), prop_->basis(), last_.coefficients, r);
+  summariseDerived(c_, prop_->mapping(), prop_->basis(), last_.coefficients, pdf_sampler_, r);
   r->integrations = prop_->integrations() + filter_.horizonEvaluations();
   for (const auto& w : last_.health.warnings()) r->warnings.push_back(w);
   if (r->rejected_samples) {

@@ -31,16 +31,22 @@ std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::Matr
 
 void summariseDerived(const EstimatorConfig& c, const ParameterMapping& mapping,
                       const PolynomialBasis& basis, const Eigen::MatrixXd& coeffs,
-                      OfflineResult* r) {
+                      const PdfSamplerFuture& sampler, OfflineResult* r) {
   r->derived.clear();
   const DerivedExpansions d = rolloverExpansions(mapping, basis, coeffs);
   if (d.empty()) return;  // no heights: the JSON and pdfs.csv as without them
   const Eigen::VectorXd mean = pcMean(d.coefficients), sd = pcStddev(d.coefficients);
+  // The parameters' draws when they share them (pdf.shared_draws), else the first seed.
+  std::vector<Histogram> shared;
+  if (c.pdf.shared_draws && sampler.get()->terms() == basis.size()) {
+    shared = sampler.get()->histograms(d.coefficients, machineThreads());
+  }
   for (std::size_t i = 0; i < d.names.size(); ++i) {
     const Eigen::Index k = static_cast<Eigen::Index>(i);
     DerivedSummary s{d.names[i], mean[k], sd[k], d.coefficients.row(k).transpose(), {}};
-    // The parameters' draws when they share them (pdf.shared_draws), else the first seed.
-    s.pdf = pcHistogram(basis, s.coefficients, c.pdf.draws, c.pdf.bins, c.pdf.seed);
+    s.pdf = i < shared.size()
+                ? shared[i]
+                : pcHistogram(basis, s.coefficients, c.pdf.draws, c.pdf.bins, c.pdf.seed);
     r->derived.push_back(std::move(s));
   }
 }

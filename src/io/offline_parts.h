@@ -26,10 +26,12 @@ PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis
 std::vector<Histogram> pcPdfs(const PdfSamplerFuture& sampler, const Eigen::MatrixXd& coeffs);
 
 // The rollover outputs of the final expansion (r->derived; none without
-// heights or coefficients), each with its PDF from pdf's draws and bins.
+// heights or coefficients), each with its PDF from pdf's draws and bins:
+// the parameters' sampler's draws when they share them (pdf.shared_draws;
+// the same numbers as drawing them anew, without doing so three times).
 void summariseDerived(const EstimatorConfig& c, const ParameterMapping& mapping,
                       const PolynomialBasis& basis, const Eigen::MatrixXd& coeffs,
-                      OfflineResult* r);
+                      const PdfSamplerFuture& sampler, OfflineResult* r);
 
 // A record to the sink (when there is one); the result keeps the last.
 void give(SampleRecord record, SampleSink* sink, OfflineResult* r);

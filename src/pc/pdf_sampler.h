@@ -40,6 +40,7 @@ class ParameterPdfSampler {
   // `threads` share the work (the same numbers for any count).
   std::vector<Histogram> histograms(const Eigen::MatrixXd& coefficients, int threads = 1) const;
   int draws() const { return draws_; }
+  int terms() const { return terms_; }
   int bins() const { return bins_; }
 
  private:

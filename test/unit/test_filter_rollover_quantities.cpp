@@ -175,6 +175,51 @@ TEST(RolloverQuantities, MeanAndStdMatchMonteCarloDraws) {
   EXPECT_GT(pc_std[0], 1.5 * pcStddev(d1.coefficients)[0]);
 }
 
+// Eight germs (a road-free config's load and tolerances): beyond the tensor
+// rule's size, so the sparse rule (Smolyak of level order + 1) projects. A
+// linear function of the parameters (degree 2 in the germs) comes out
+// exactly, and the quantities' mean and std match Monte Carlo draws.
+TEST(RolloverQuantities, ManyGermsOnTheSparseRule) {
+  const VehicleParameters p = elevated();
+  const ParameterMapping mapping(*rollPlane(p), {kMass,
+                                                 {"added_mass_position", 0.762, 0.25, GermSpec{}},
+                                                 {"added_mass_height", 0.40, 0.5, GermSpec{}},
+                                                 {"bar_mass", 580.0, 0.03, GermSpec{}},
+                                                 {"body_cg_height", 0.25, 0.2, GermSpec{}},
+                                                 {"mount_height", 0.40, 0.05, GermSpec{}},
+                                                 {"wheel_radius", 0.30, 0.05, GermSpec{}},
+                                                 {"unsprung_mass_left", 36.26, 0.1, GermSpec{}}});
+  const PolynomialBasis basis(mapping.germs(), 2);
+  Eigen::MatrixXd c = mapping.priorCoefficients(basis);
+  for (Eigen::Index j = 9; j < c.cols(); ++j) c.col(j) = 0.1 * c.col(1 + j % 8) / double(j);
+  c(0, 3) = 12.0;  // the load depends on its height's germ, as a posterior's does
+  c(4, 1) = 0.01;
+  Eigen::MatrixXd nodes;
+  Eigen::VectorXd weights;
+  projectionRule(basis, &nodes, &weights);
+  ASSERT_LT(nodes.rows(), std::pow(6.0, 8));  // not the tensor rule
+  const Eigen::MatrixXd theta = c * basis.evaluate(nodes).transpose();
+  Eigen::RowVectorXd a = Eigen::RowVectorXd::LinSpaced(8, -2.0, 3.0);
+  const Eigen::MatrixXd linear = (a * theta).array() + 1.0;
+  Eigen::RowVectorXd exact = a * c;
+  exact(0) += 1.0;
+  EXPECT_LT((projectValues(basis, nodes, weights, linear) - exact).cwiseAbs().maxCoeff(), 1e-10);
+  const DerivedExpansions d = rolloverExpansions(mapping, basis, c);
+  ASSERT_FALSE(d.empty());
+  const int draws = 200000;
+  const Eigen::MatrixXd xi = sampleGerms(basis, draws, 3);
+  const Eigen::MatrixXd f =
+      rolloverValues(mapping, mapping.fullParameters(c * basis.evaluate(xi).transpose()));
+  const Eigen::VectorXd mc_mean = f.rowwise().mean();
+  const Eigen::VectorXd mc_std =
+      ((f.colwise() - mc_mean).array().square().rowwise().sum() / (draws - 1)).sqrt();
+  const Eigen::VectorXd pc_mean = pcMean(d.coefficients), pc_std = pcStddev(d.coefficients);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(pc_mean[i], mc_mean[i], 4.0 * mc_std[i] / std::sqrt(double(draws))) << d.names[i];
+    EXPECT_NEAR(pc_std[i], mc_std[i], 0.01 * mc_std[i]) << d.names[i];
+  }
+}
+
 TEST(RolloverQuantities, AbsentWithoutHeights) {
   const ParameterMapping paper(*rollPlane(VehicleParameters{}), {kMass});  // mount_height 0
   EXPECT_FALSE(hasRolloverQuantities(paper));
