@@ -36,8 +36,11 @@ def config_text(zero, imu, samples, mass, position):
                             "  noise_relative: 0.01", 1)
         text = text.replace("    noise_floor: [5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3, 0.03, 0.03, 0.002]",
                             "    noise_floor: [5.0e-4, 5.0e-4, 5.0e-3, 5.0e-3]", 1)
-    xi_m = (mass / 200.0 - 1.0) / 0.5
-    xi_d = (position / 0.762 - 1.0) / 0.25
+    import yaml  # the germs as the file declares them (nominal, relative_range)
+    u = {q["name"]: q for q in yaml.safe_load(text)["uncertain"]}
+    xi_m = (mass / u["added_mass"]["nominal"] - 1.0) / u["added_mass"]["relative_range"]
+    xi_d = (position / u["added_mass_position"]["nominal"] - 1.0) / \
+        u["added_mass_position"]["relative_range"]
     text = text.replace("truth:                          # synthetic drives only",
                         "truth:\n  xi: [%.10f, %.10f] #" % (xi_m, xi_d), 1)
     return text

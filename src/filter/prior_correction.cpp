@@ -47,8 +47,10 @@ bool correctForPrior(const Eigen::MatrixXd& prior, const Eigen::MatrixXd& workin
   Eigen::MatrixXd d = pq_inv - q_inv;
   d = 0.5 * (d + d.transpose());
   const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(d);
-  d = eig.eigenvectors() * eig.eigenvalues().cwiseMax(0.0).asDiagonal() *
-      eig.eigenvectors().transpose();
+  const Eigen::MatrixXd& v = eig.eigenvectors();
+  d = v * eig.eigenvalues().cwiseMax(0.0).asDiagonal() * v.transpose();
+  // The directions in which the data carry information (not clipped).
+  const Eigen::VectorXd informed = (eig.eigenvalues().array() > 0.0).cast<double>().matrix();
   const Eigen::MatrixXd information = d + p0_inv;
   const Eigen::LLT<Eigen::MatrixXd> info(information);
   if (info.info() != Eigen::Success) return false;
@@ -56,8 +58,14 @@ bool correctForPrior(const Eigen::MatrixXd& prior, const Eigen::MatrixXd& workin
   const auto mean = [&](const Eigen::MatrixXd& c) {
     return Eigen::VectorXd(c.col(0).cwiseQuotient(scale));
   };
-  // The data's share of the information vector, D m_data = P_q^-1 m_q - Q^-1 q.
-  const Eigen::VectorXd b = pq_inv * mean(posterior) - q_inv * mean(working) + p0_inv * mean(prior);
+  // The data's share of the information vector, D m_data = P_q^-1 m_q - Q^-1 q,
+  // kept in the directions D keeps: in a clipped one (the posterior wider than
+  // q there, as a parameter walk makes it) the data carry no information, and
+  // its share there would move the mean by what the widening did (a road-told
+  // run with filter.drift_relative flipped every mass and stiffness to -3.1x).
+  const Eigen::VectorXd data =
+      v * informed.asDiagonal() * v.transpose() * (pq_inv * mean(posterior) - q_inv * mean(working));
+  const Eigen::VectorXd b = data + p0_inv * mean(prior);
   const Eigen::VectorXd m = p * b;
   return mapOntoMoments(posterior, m, p, scale);
 }

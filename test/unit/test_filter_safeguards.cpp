@@ -244,6 +244,34 @@ TEST(PriorCorrection, SwapsTheWorkingPriorForThePriorInClosedForm) {
   EXPECT_LT((same - coefficients(mq, pq)).norm(), 1e-9);
 }
 
+// A parameter that walked (filter.drift) since the working prior: the
+// posterior is wider than q along it and its mean has moved by the walk, not
+// by data. The data carry no information there, so the corrected mean there
+// is the prior's; the read direction keeps the closed form.
+TEST(PriorCorrection, AWalkedDirectionCarriesNoInformation) {
+  const auto coefficients = [](const Eigen::Vector2d& mean, const Eigen::Matrix2d& cov) {
+    Eigen::MatrixXd c(2, 3);
+    c.col(0) = mean;
+    c.rightCols(2) = cov.llt().matrixL();
+    return c;
+  };
+  const Eigen::Vector2d m0(0.0, 0.0), q(0.2, 0.1);
+  const Eigen::Matrix2d p0 = Eigen::Vector2d(1.0, 1.0).asDiagonal();
+  const Eigen::Matrix2d qc = Eigen::Vector2d(0.04, 0.04).asDiagonal();
+  // Parameter 0 read (information 100, reading 0.3); parameter 1 unread but
+  // walked: variance 0.04 + 0.05, mean moved from 0.1 to 0.9.
+  const Eigen::Matrix2d pq = Eigen::Vector2d(1.0 / (25.0 + 100.0), 0.09).asDiagonal();
+  const Eigen::Vector2d mq(pq(0, 0) * (25.0 * q(0) + 100.0 * 0.3), 0.9);
+  Eigen::MatrixXd posterior = coefficients(mq, pq);
+  ASSERT_TRUE(correctForPrior(coefficients(m0, p0), coefficients(q, qc), posterior));
+  const double p_read = 1.0 / (1.0 + 100.0);
+  EXPECT_NEAR(posterior(0, 0), p_read * (100.0 * 0.3), 1e-12);
+  EXPECT_NEAR(posterior(1, 0), 0.0, 1e-12);  // the prior's mean: the walk is no reading
+  const Eigen::MatrixXd rest = posterior.rightCols(2);
+  EXPECT_NEAR((rest * rest.transpose())(0, 0), p_read, 1e-12);
+  EXPECT_NEAR((rest * rest.transpose())(1, 1), 1.0, 1e-12);
+}
+
 const std::string kUncertain =
     "uncertain:\n"
     "  - {name: added_mass, nominal: 200.0, relative_range: 0.5, germ: {family: beta, alpha: 2, beta: 2}}\n"
