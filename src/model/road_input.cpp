@@ -38,7 +38,7 @@ class CourseIso8608 : public RoadInput {
   Eigen::Vector2d height(double tau) const override {
     double s = speed_ * tau;
     if (accel_ != 0.0) s += 0.5 * accel_ * tau * tau;
-    Eigen::Vector2d h(profile_.height(0, s), profile_.height(1, s));
+    Eigen::Vector2d h = profile_.bothTracks(s);
     if (from_[0] != 0.0 || from_[1] != 0.0) h += (1.0 - iso8608LeadIn(s, lead_in_)) * from_;
     return h;
   }

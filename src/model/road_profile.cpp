@@ -67,6 +67,18 @@ double Iso8608Profile::height(int track, double s) const {
   return iso8608LeadIn(s, s_.lead_in) * h;
 }
 
+Eigen::Vector2d Iso8608Profile::bothTracks(double s) const {
+  if (s <= 0.0) return Eigen::Vector2d::Zero();
+  double own[2] = {0.0, 0.0};
+  for (int t = 0; t < 2; ++t) {
+    for (std::size_t k = 0; k < wavenumber_.size(); ++k) {
+      own[t] += amplitude_[k] * std::sin(wavenumber_[k] * s + phase_[t][k]);
+    }
+  }
+  const double c = s_.correlation, lead = iso8608LeadIn(s, s_.lead_in);
+  return {lead * own[0], lead * (c * own[0] + std::sqrt(1.0 - c * c) * own[1])};
+}
+
 MeasuredProfile::MeasuredProfile(std::vector<double> s, std::vector<double> left,
                                  std::vector<double> right)
     : s_(std::move(s)), h_{std::move(left), std::move(right)} {
@@ -154,6 +166,11 @@ DrivenProfileRoad::DrivenProfileRoad(std::shared_ptr<const TrackProfile> profile
 }
 
 void DrivenProfileRoad::heights(double t, Eigen::Ref<Eigen::VectorXd> out) const {
+  if (contacts_.size() == 2 && contacts_[0].first == 0 && contacts_[1].first == 1 &&
+      contacts_[0].second == contacts_[1].second) {  // both tracks at one distance
+    out = profile_->bothTracks(speed_ * t - contacts_[0].second);
+    return;
+  }
   for (std::size_t c = 0; c < contacts_.size(); ++c) {
     out[static_cast<Eigen::Index>(c)] =
         profile_->height(contacts_[c].first, speed_ * t - contacts_[c].second);

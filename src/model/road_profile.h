@@ -18,6 +18,8 @@ class TrackProfile {
  public:
   virtual ~TrackProfile() = default;
   virtual double height(int track, double s) const = 0;
+  // Both tracks at one distance (left, right): height(0, s), height(1, s).
+  virtual Eigen::Vector2d bothTracks(double s) const { return {height(0, s), height(1, s)}; }
   // Distances in (s0, s1) where the profile has a kink.
   virtual std::vector<double> kinks(double s0, double s1) const = 0;
 };
@@ -35,6 +37,8 @@ class Iso8608Profile : public TrackProfile {
  public:
   explicit Iso8608Profile(const Iso8608Settings& s);
   double height(int track, double s) const override;
+  // The left track's harmonics summed once for both (the same bits).
+  Eigen::Vector2d bothTracks(double s) const override;
   std::vector<double> kinks(double, double) const override { return {}; }
 
  private:

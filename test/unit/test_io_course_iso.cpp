@@ -58,6 +58,28 @@ std::vector<CourseSegment> dayCourse() {
 
 double below(double t) { return std::nextafter(t, -std::numeric_limits<double>::infinity()); }
 
+// Both tracks at one distance in one call (the left's harmonics summed once)
+// are the single-track heights bit for bit, for correlated and independent
+// tracks, before and after the lead-in.
+TEST(CourseIso, BothTracksAreTheSingleTrackHeightsBitForBit) {
+  for (const double correlation : {0.0, 0.6}) {
+    Iso8608Settings s;
+    s.road_class = 'C';
+    s.seed = 9;
+    s.correlation = correlation;
+    s.lead_in = 2.0;
+    const Iso8608Profile profile(s);
+    int nonzero = 0;
+    for (double d = -1.0; d < 40.0; d += 0.173) {
+      const Eigen::Vector2d both = profile.bothTracks(d);
+      EXPECT_EQ(both[0], profile.height(0, d)) << d;
+      EXPECT_EQ(both[1], profile.height(1, d)) << d;
+      nonzero += both[1] != 0.0;
+    }
+    EXPECT_GT(nonzero, 200);
+  }
+}
+
 TEST(CourseIso, SegmentsAreTheStandaloneRoadBlendedFromWhereTheyStart) {
   const std::vector<CourseSegment> segments = dayCourse();
   const CourseRoad course(segments);
