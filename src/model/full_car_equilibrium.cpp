@@ -216,6 +216,20 @@ FullCarEquilibrium solve(const FullCarColumn& p) {
 
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p) { return solve(p); }
 
+FullCarEquilibriumKey fullCarEquilibriumKey(const FullCarColumn& p) {
+  const Setup s = setupOf(p);
+  FullCarEquilibriumKey key;
+  std::size_t i = 0;
+  for (const double* group : {s.x, s.y, s.k, s.k3, s.unsprung_weight, s.bar}) {
+    for (int c = 0; c < 4; ++c) key[i++] = group[c];
+  }
+  key[i++] = s.tyre;
+  for (double b : s.body_load) key[i++] = b;
+  key[i++] = s.tilt_moment;
+  key[i++] = s.elevated ? 1.0 : 0.0;
+  return key;
+}
+
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p) {
   const Eigen::VectorXd v = p.toVector();
   return solve(FullCarColumn(v.data()));

@@ -2,7 +2,6 @@
 #include "pc_ekf/model/full_car_model.h"
 
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
@@ -29,32 +28,33 @@ struct FullCarReadings {
 
 namespace {
 
-// A direct-mapped table of the thread's latest equilibria, keyed by the model
-// and the exact bits of the parameter vector (a hit returns what the solve
-// would: it is deterministic).
+// A direct-mapped table of the thread's latest equilibria, keyed by the exact
+// bits of what the solve reads (fullCarEquilibriumKey: a hit returns what the
+// solve would, it is deterministic). Not by the whole parameter vector: the
+// one-step filter's finite-difference Jacobian steps dampers, inertias and,
+// at the empty vehicle (tare), the load's position, which leave it as it is.
 struct EquilibriumMemo {
   struct Slot {
-    std::uint64_t model = 0;  // 0: empty
-    Eigen::VectorXd params;
+    bool used = false;
+    FullCarEquilibriumKey key{};
     FullCarEquilibrium equilibrium;
     std::string error;  // the solve's failure, if it failed
   };
   static constexpr std::size_t kSlots = 1024;
   std::array<Slot, kSlots> slots;
 
-  static std::size_t slotOf(std::uint64_t model, const Eigen::Ref<const Eigen::VectorXd>& p) {
-    std::uint64_t h = 1469598103934665603ull ^ model;  // FNV-1a over the bytes
-    for (Eigen::Index i = 0; i < p.size(); ++i) {
+  static std::size_t slotOf(const FullCarEquilibriumKey& key) {
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a over whole words, then mixed
+    for (const double v : key) {
       std::uint64_t bits;
-      const double v = p[i];
       std::memcpy(&bits, &v, sizeof bits);
-      for (int b = 0; b < 8; ++b) h = (h ^ ((bits >> (8 * b)) & 0xff)) * 1099511628211ull;
+      h = (h ^ bits) * 1099511628211ull;
+      h ^= h >> 29;
     }
     return static_cast<std::size_t>(h % kSlots);
   }
 };
 
-std::atomic<std::uint64_t> next_model_id{1};
 
 // Per-point constants, one column per quantity (PointConstantTable).
 struct PointConstants : PointConstantTable {
@@ -432,7 +432,6 @@ FullCarModel::FullCarModel(ModelParameters nominal, std::shared_ptr<const Contac
       readings_(readings),
       state_names_(fullCarDescription().stateNames()),
       nominal_vector_(std::move(nominal.values)),
-      id_(next_model_id++),
       h_(Eigen::MatrixXd::Zero(kChannels, 14)),
       road_(std::move(road)) {
   // Tare offsets depend on each point's parameters: readings as states.
@@ -475,11 +474,11 @@ std::string FullCarModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>&
 
 FullCarEquilibrium FullCarModel::equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const {
   thread_local EquilibriumMemo memo;
-  EquilibriumMemo::Slot& slot = memo.slots[EquilibriumMemo::slotOf(id_, params)];
-  if (slot.model != id_ || slot.params.size() != params.size() ||
-      std::memcmp(slot.params.data(), params.data(), sizeof(double) * params.size()) != 0) {
-    slot.model = id_;
-    slot.params = params;
+  const FullCarEquilibriumKey key = fullCarEquilibriumKey(FullCarColumn(params.data()));
+  EquilibriumMemo::Slot& slot = memo.slots[EquilibriumMemo::slotOf(key)];
+  if (!slot.used || std::memcmp(slot.key.data(), key.data(), sizeof(double) * key.size()) != 0) {
+    slot.used = true;
+    slot.key = key;
     slot.error.clear();
     try {
       slot.equilibrium = solveFullCarEquilibrium(FullCarColumn(params.data()));

@@ -27,6 +27,7 @@
 
 #include <cstdint>
 
+#include <array>
 #include <memory>
 #include <string>
 #include <vector>
@@ -163,6 +164,11 @@ struct FullCarEquilibrium {
 // fails to converge.
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p);
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p);
+// The numbers the solve reads (corner positions, springs, unsprung weights,
+// tyre, loads, bars, the elevated moment): columns with equal keys have the
+// same equilibrium bit for bit (a damper or an inertia does not enter).
+using FullCarEquilibriumKey = std::array<double, 30>;
+FullCarEquilibriumKey fullCarEquilibriumKey(const FullCarColumn& p);
 std::vector<FullCarEquilibrium> solveFullCarEquilibria(const std::vector<FullCarParameters>& ps);
 
 struct FullCarReadings;
@@ -211,7 +217,6 @@ class FullCarModel : public MechanicalModel {
   ReadingSettings readings_;
   std::vector<std::string> state_names_;
   Eigen::VectorXd nominal_vector_;
-  std::uint64_t id_;  // tells the memo's entries of two models apart
   Eigen::MatrixXd h_;
   std::shared_ptr<const ContactRoad> road_;
 };

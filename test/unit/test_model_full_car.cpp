@@ -129,6 +129,46 @@ TEST(FullCarEquilibrium, ResidualsBelow1e9) {
   }
 }
 
+// The model memoises equilibria by fullCarEquilibriumKey: values the solve
+// does not read leave the key (and the equilibrium) as they are; each value
+// it reads changes the key.
+TEST(FullCarEquilibrium, KeyHoldsWhatTheSolveReads) {
+  FullCarParameters base = truth();
+  base.body_cg_height = 0.3;
+  base.anti_roll_bar[0] = 8000.0;
+  const Eigen::VectorXd v0 = base.toVector();
+  const FullCarEquilibriumKey k0 = fullCarEquilibriumKey(FullCarColumn(v0.data()));
+  const FullCarEquilibrium e0 = solveFullCarEquilibrium(base);
+
+  FullCarParameters unread = base;
+  unread.damping[0] *= 1.3;
+  unread.damping[1] *= 0.7;
+  unread.roll_inertia *= 1.1;
+  unread.pitch_inertia *= 0.9;
+  const Eigen::VectorXd v1 = unread.toVector();
+  EXPECT_TRUE(fullCarEquilibriumKey(FullCarColumn(v1.data())) == k0);
+  const FullCarEquilibrium e1 = solveFullCarEquilibrium(unread);
+  EXPECT_EQ(e1.heave, e0.heave);
+  EXPECT_EQ(e1.pitch, e0.pitch);
+  EXPECT_EQ(e1.roll, e0.roll);
+
+  // Each value the solve reads, nudged: a different key and a different pose.
+  std::vector<FullCarParameters> read(6, base);
+  read[0].spring_linear[1] *= 1.01;
+  read[1].anti_roll_bar[0] *= 1.5;
+  read[2].added_mass_y *= 1.01;
+  read[3].body_cg_height += 0.01;
+  read[4].tyre_stiffness *= 1.01;
+  read[5].unsprung_mass[0] *= 1.01;
+  for (std::size_t i = 0; i < read.size(); ++i) {
+    const Eigen::VectorXd v = read[i].toVector();
+    EXPECT_FALSE(fullCarEquilibriumKey(FullCarColumn(v.data())) == k0) << "nudge " << i;
+    const FullCarEquilibrium e = solveFullCarEquilibrium(read[i]);
+    const bool moved = e.heave != e0.heave || e.pitch != e0.pitch || e.roll != e0.roll;
+    EXPECT_TRUE(moved) << "nudge " << i;
+  }
+}
+
 TEST(FullCarEquilibrium, TruthValues) {
   // Printed for comparison with an independent implementation.
   const FullCarParameters p = truth();
