@@ -1,6 +1,5 @@
 #include "pc_ekf/filter/reopen_chance.h"
 
-#include <algorithm>
 #include <cmath>
 #include <map>
 #include <mutex>
@@ -22,26 +21,20 @@ double simulate(int window, int dof, double confidence, int after) {
   // The upper bound of the two-sided interval: only a window above it counts.
   const double tail = (1.0 - confidence) / 2.0;
   const double upper = chiSquareQuantile(1.0 - tail, static_cast<double>(window) * dof);
-  // chi2(dof) = -2 log(U_1 ... U_{dof/2}) (+ Z^2 when dof is odd): exact, and
-  // several times cheaper than a gamma variate (this runs before the first
-  // sample of every process, so its cost is on the start-up path).
+  // chi2(dof): 1 and 2 dof in their direct forms (Z^2, -2 log U), several
+  // times cheaper than a gamma variate; more as 2 Gamma(dof / 2), one draw
+  // whatever dof is (this runs before the first sample of every process).
   std::mt19937_64 rng(20261204);
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::normal_distribution<double> normal;
-  const int pairs = dof / 2;
-  const bool odd = dof % 2 != 0;
+  std::gamma_distribution<double> half_chi2(dof / 2.0, 2.0);
   const auto chi2 = [&]() {
-    double x = 0.0;
-    for (int done = 0; done < pairs; done += 8) {  // 8 factors at a time: no underflow
-      double product = 1.0;
-      for (int i = done; i < std::min(pairs, done + 8); ++i) product *= 1.0 - uniform(rng);
-      x -= 2.0 * std::log(product);  // 1 - U is in (0, 1]
-    }
-    if (odd) {
+    if (dof == 1) {
       const double z = normal(rng);
-      x += z * z;
+      return z * z;
     }
-    return x;
+    if (dof == 2) return -2.0 * std::log(1.0 - uniform(rng));  // 1 - U is in (0, 1]
+    return half_chi2(rng);
   };
   std::vector<double> ring(static_cast<std::size_t>(window));
   int filled = 0;
