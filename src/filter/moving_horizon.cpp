@@ -54,6 +54,27 @@ MovingHorizon::MovingHorizon(const PcPropagator& propagator, const MovingHorizon
                                   "to have a spread");
     }
   }
+  // The mass scale: masses, stiffnesses, damper rates and inertias (units of
+  // kg or N) times one factor change no reading, so the data say nothing
+  // along it; its direction at the prior's mean, in zeta.
+  if (settings_.mass_scale_unobservable) {
+    const ParameterTable& table = model.description().parameters();
+    const std::vector<std::string> names = propagator_.mapping().names();
+    std::vector<int> rows;
+    for (int i = 0; i < n; ++i) {
+      const int row = table.index(names[static_cast<std::size_t>(i)]);
+      const std::string unit = row >= 0 ? table[row].unit : std::string();
+      if (unit.rfind("kg", 0) == 0 || unit.rfind("N", 0) == 0) rows.push_back(i);
+    }
+    scale_ = Eigen::VectorXd::Zero(n);
+    for (int i : rows) scale_[i] = prior_mean_[i] / prior_std_[i];
+    const double norm = scale_.norm();
+    if (rows.size() >= 2 && norm > 0.0 && std::isfinite(norm)) {
+      scale_ /= norm;
+    } else {
+      scale_.resize(0);
+    }
+  }
   const auto& indices = propagator_.basis().multiIndices();
   degree_one_.assign(static_cast<std::size_t>(n), -1);
   for (std::size_t j = 0; j < indices.size(); ++j) {
@@ -242,6 +263,15 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
   if (!z.allFinite()) return false;
   jacobian->setZero(c, static_cast<Eigen::Index>(at.size()));
   for (int i = 0; i < n; ++i) jacobian->col(i) = (z.col(i + 1) - z.col(0)) / steps[i];
+  if (scale_.size() == n) {
+    // No slope along the prior's mass scale. At `at` the readings' slope is 0
+    // along at's own scale direction, which turns as the estimate moves; the
+    // updates linearised at different points would together inform the scale
+    // that no reading holds (and walk the estimate along it). Held to one
+    // direction, the scale keeps the prior's information.
+    const Eigen::VectorXd along = jacobian->leftCols(n) * scale_;
+    jacobian->leftCols(n).noalias() -= along * scale_.transpose();
+  }
   *z0 = z.col(0);
   if (nuisance) {
     // The slope in the angle's error: a forward difference of the model's

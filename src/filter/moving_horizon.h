@@ -226,6 +226,7 @@ class MovingHorizon {
   double window_start_ = 0.0;
   std::vector<Kept> kept_;
   std::vector<int> degree_one_;  // basis term of each parameter's germ, degree 1
+  Eigen::VectorXd scale_;  // the mass scale's unit direction in zeta (empty: not held)
   long evaluations_ = 0;
 };
 

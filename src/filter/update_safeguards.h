@@ -89,6 +89,11 @@ struct MovingHorizonSettings {
   // a low-passed or averaged input is shared by the samples that follow
   // (Measurement::input_slopes).
   bool input_noise_states = false;
+  // No reading changes when every mass, stiffness, damper rate and inertia
+  // is scaled by one factor: each update's slope along that direction (at
+  // the prior's mean) is set to 0, so that the scale keeps the prior's
+  // information (filter.horizon.mass_scale_unobservable).
+  bool mass_scale_unobservable = true;
   bool nuisance() const {
     return cross_fall > 0.0 || cross_fall_walk > 0.0 || accel_bias > 0.0 || gyro_bias > 0.0;
   }

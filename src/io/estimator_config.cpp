@@ -338,6 +338,8 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
     w.fail("input_noise", "'" + input_noise + "'", "sample or state");
   }
   s.horizon.input_noise_states = input_noise == "state";
+  s.horizon.mass_scale_unobservable =
+      readFlag(w, "mass_scale_unobservable", s.horizon.mass_scale_unobservable);
   w.finish();
   s.horizon.window = linearization == "mean" ? window : 0.0;
   if (s.reopen.mode == ReopenMode::kLoad && linearization != "mean") {
