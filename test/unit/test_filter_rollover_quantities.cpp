@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdint>
 #include <memory>
 
 #include "pc_ekf/filter/rollover_quantities.h"
@@ -150,15 +151,15 @@ TEST(RolloverQuantities, LinearFunctionsProjectExactly) {
   EXPECT_LT((projected - exact).cwiseAbs().maxCoeff(), 1e-12);
 }
 
-TEST(RolloverQuantities, MeanAndStdMatchMonteCarloDraws) {
-  const ThreeGerms g;
-  const Eigen::MatrixXd c = g.coefficients();
-  const DerivedExpansions d = rolloverExpansions(g.mapping, g.basis, c);
-  ASSERT_FALSE(d.empty());
+// The quantities' PC mean and std against 200 000 Monte Carlo draws of the
+// germs (seed), each quantity evaluated at the drawn parameters.
+void expectMonteCarloMoments(const ParameterMapping& mapping, const PolynomialBasis& basis,
+                             const Eigen::MatrixXd& c, const DerivedExpansions& d,
+                             std::uint64_t seed) {
   const int draws = 200000;
-  const Eigen::MatrixXd xi = sampleGerms(g.basis, draws, 7);
-  const Eigen::MatrixXd theta = c * g.basis.evaluate(xi).transpose();
-  const Eigen::MatrixXd f = rolloverValues(g.mapping, g.mapping.fullParameters(theta));
+  const Eigen::MatrixXd xi = sampleGerms(basis, draws, seed);
+  const Eigen::MatrixXd f =
+      rolloverValues(mapping, mapping.fullParameters(c * basis.evaluate(xi).transpose()));
   const Eigen::VectorXd mc_mean = f.rowwise().mean();
   const Eigen::VectorXd mc_std =
       ((f.colwise() - mc_mean).array().square().rowwise().sum() / (draws - 1)).sqrt();
@@ -167,6 +168,15 @@ TEST(RolloverQuantities, MeanAndStdMatchMonteCarloDraws) {
     EXPECT_NEAR(pc_mean[i], mc_mean[i], 4.0 * mc_std[i] / std::sqrt(double(draws))) << d.names[i];
     EXPECT_NEAR(pc_std[i], mc_std[i], 0.01 * mc_std[i]) << d.names[i];
   }
+}
+
+TEST(RolloverQuantities, MeanAndStdMatchMonteCarloDraws) {
+  const ThreeGerms g;
+  const Eigen::MatrixXd c = g.coefficients();
+  const DerivedExpansions d = rolloverExpansions(g.mapping, g.basis, c);
+  ASSERT_FALSE(d.empty());
+  expectMonteCarloMoments(g.mapping, g.basis, c, d, 7);
+  const Eigen::VectorXd pc_std = pcStddev(d.coefficients);
   // The load's height moves the CG: its spread is not the load's alone.
   const ParameterMapping mass_only(*rollPlane(g.p), {kMass});
   const PolynomialBasis basis1(mass_only.germs(), 3);
@@ -206,18 +216,7 @@ TEST(RolloverQuantities, ManyGermsOnTheSparseRule) {
   EXPECT_LT((projectValues(basis, nodes, weights, linear) - exact).cwiseAbs().maxCoeff(), 1e-10);
   const DerivedExpansions d = rolloverExpansions(mapping, basis, c);
   ASSERT_FALSE(d.empty());
-  const int draws = 200000;
-  const Eigen::MatrixXd xi = sampleGerms(basis, draws, 3);
-  const Eigen::MatrixXd f =
-      rolloverValues(mapping, mapping.fullParameters(c * basis.evaluate(xi).transpose()));
-  const Eigen::VectorXd mc_mean = f.rowwise().mean();
-  const Eigen::VectorXd mc_std =
-      ((f.colwise() - mc_mean).array().square().rowwise().sum() / (draws - 1)).sqrt();
-  const Eigen::VectorXd pc_mean = pcMean(d.coefficients), pc_std = pcStddev(d.coefficients);
-  for (int i = 0; i < 3; ++i) {
-    EXPECT_NEAR(pc_mean[i], mc_mean[i], 4.0 * mc_std[i] / std::sqrt(double(draws))) << d.names[i];
-    EXPECT_NEAR(pc_std[i], mc_std[i], 0.01 * mc_std[i]) << d.names[i];
-  }
+  expectMonteCarloMoments(mapping, basis, c, d, 3);
 }
 
 TEST(RolloverQuantities, AbsentWithoutHeights) {
