@@ -162,9 +162,9 @@ OneStepFilter::OneStepFilter(std::shared_ptr<const PcPropagator> propagator,
     horizon_->keepRecent(changeSpan());
   }
   startRelinearization();
-  // The re-open rule's chance rate, simulated once per process: here, before
-  // the first sample, for a sample with every channel of the model.
-  reopenChance(static_cast<int>(propagator_->model().observationMatrix().rows()));
+  // The re-open rule's chance rate is simulated at the first sample with a
+  // given channel count (a few ms, once per process and count): the model's
+  // every channel is rarely what a sample carries.
 }
 
 double OneStepFilter::reopenChance(int dof) {

@@ -165,7 +165,7 @@ TEST(ChanceReopens, TheRuleInClosedFormForAOneSampleWindow) {
   EXPECT_NEAR(chanceReopenPerSample(1, 3, 0.99, 1), 0.005, 4.0 * std::sqrt(0.005 / 2e5));
   EXPECT_NEAR(chanceReopenPerSample(1, 2, 0.6, 1), 0.2, 4.0 * std::sqrt(0.2 * 0.8 / 2e5));
   // The chi-square draw's three forms (1, 2, more degrees of freedom).
-  for (const int dof : {1, 2, 5, 40}) {
+  for (const int dof : {1, 2, 3, 5, 9, 40}) {
     EXPECT_NEAR(chanceReopenPerSample(1, dof, 0.9, 1), 0.05, 4.0 * std::sqrt(0.05 * 0.95 / 2e5))
         << dof << " dof";
   }
