@@ -36,10 +36,12 @@ void summariseDerived(const EstimatorConfig& c, const ParameterMapping& mapping,
   const DerivedExpansions d = rolloverExpansions(mapping, basis, coeffs);
   if (d.empty()) return;  // no heights: the JSON and pdfs.csv as without them
   const Eigen::VectorXd mean = pcMean(d.coefficients), sd = pcStddev(d.coefficients);
-  // The parameters' draws when they share them (pdf.shared_draws), else the first seed.
+  // The parameters' draws when they share them (pdf.shared_draws), else the
+  // first seed's (the first parameter's set, already drawn by the sampler).
   std::vector<Histogram> shared;
-  if (c.pdf.shared_draws && sampler.get()->terms() == basis.size()) {
-    shared = sampler.get()->histograms(d.coefficients, machineThreads());
+  const std::shared_ptr<const ParameterPdfSampler> s = sampler.get();
+  if (s->terms() == basis.size() && s->draws() == c.pdf.draws && s->bins() == c.pdf.bins) {
+    shared = s->histogramsOnFirstDraws(d.coefficients, machineThreads());
   }
   for (std::size_t i = 0; i < d.names.size(); ++i) {
     const Eigen::Index k = static_cast<Eigen::Index>(i);

@@ -127,6 +127,12 @@ ParameterPdfSampler::ParameterPdfSampler(const PolynomialBasis& basis, int draws
   for (std::optional<ParameterPdfSampler>& m : made) per_parameter_.push_back(std::move(*m));
 }
 
+std::vector<Histogram> ParameterPdfSampler::histogramsOnFirstDraws(
+    const Eigen::MatrixXd& coefficients, int threads) const {
+  return per_parameter_.empty() ? histograms(coefficients, threads)
+                                : per_parameter_.front().histograms(coefficients, threads);
+}
+
 std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& coefficients,
                                                        int threads) const {
   threads = std::max(1, threads);

@@ -39,6 +39,11 @@ class ParameterPdfSampler {
   // over its sample range; none when a coefficient is not finite.
   // `threads` share the work (the same numbers for any count).
   std::vector<Histogram> histograms(const Eigen::MatrixXd& coefficients, int threads = 1) const;
+  // Every row on the draws of `seed` itself (the shared draws, or the first
+  // parameter's set): pcHistogram(basis, row, draws, bins, seed)'s numbers
+  // for any number of rows.
+  std::vector<Histogram> histogramsOnFirstDraws(const Eigen::MatrixXd& coefficients,
+                                                int threads = 1) const;
   int draws() const { return draws_; }
   int terms() const { return terms_; }
   int bins() const { return bins_; }

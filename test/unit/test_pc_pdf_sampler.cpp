@@ -113,10 +113,23 @@ TEST(PdfSampler, IndependentDrawsPerParameterEqualPcHistogramAtSeedPlusI) {
     EXPECT_EQ(h[i].densities, old.densities) << i;
   }
   // The second parameter's draws differ from the shared set's.
-  const std::vector<Histogram> shared = ParameterPdfSampler(basis, 50000, 60, 11).histograms(c);
+  const ParameterPdfSampler shared_sampler(basis, 50000, 60, 11);
+  const std::vector<Histogram> shared = shared_sampler.histograms(c);
   EXPECT_EQ(shared[0].densities, h[0].densities);
   EXPECT_NE(shared[1].densities, h[1].densities);
   EXPECT_THROW(sampler.histograms(c.topRows(1)), std::invalid_argument);
+  // Derived quantities (any number of rows) on the first seed's draws, as
+  // pcHistogram(..., seed) of each: the set the sampler already drew.
+  const Eigen::MatrixXd three = posteriorLike(3, basis.size(), 8);
+  for (const ParameterPdfSampler* s : {&sampler, &shared_sampler}) {
+    const std::vector<Histogram> first = s->histogramsOnFirstDraws(three);
+    ASSERT_EQ(first.size(), 3u);
+    for (int i = 0; i < 3; ++i) {
+      const Histogram old = pcHistogram(basis, three.row(i).transpose(), 50000, 60, 11);
+      EXPECT_EQ(first[i].edges, old.edges) << i;
+      EXPECT_EQ(first[i].densities, old.densities) << i;
+    }
+  }
 }
 
 // The set-up shared among threads (estimate_offline draws on every core):
