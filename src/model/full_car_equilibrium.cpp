@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "pc_ekf/model/full_car_model.h"
 
@@ -138,13 +139,36 @@ Vector7 residuals(const Setup& s, const Vector7& x, bool cubic, Matrix7* j) {
   throw std::runtime_error(os.str());
 }
 
-// The Newton step's linear solve: full pivoting as before without heights and
-// bars (bit for bit), partial pivoting with them (several times faster: the
-// road-free full car solves each collocation point's equilibria at every
-// re-linearisation; the Jacobian is a stiffness matrix, well conditioned).
-Vector7 linearSolve(const Setup& s, const Matrix7& j, const Vector7& r) {
-  if (s.elevated) return j.partialPivLu().solve(r);
-  return j.fullPivLu().solve(r);
+// The Newton step's linear solve: Gaussian elimination with partial
+// pivoting, written out for 7 x 7 (the Jacobian is a stiffness matrix, well
+// conditioned). Every collocation point's equilibrium is solved at every
+// sample (the admissibility check): Eigen's full pivoting took 30 % of
+// full_car_live.yaml's run, its general partial-pivoting kernel 18 %.
+Vector7 linearSolve(const Matrix7& j, const Vector7& r) {
+  double a[7][8];
+  for (int row = 0; row < 7; ++row) {
+    for (int col = 0; col < 7; ++col) a[row][col] = j(row, col);
+    a[row][7] = r[row];
+  }
+  for (int col = 0; col < 7; ++col) {
+    int pivot = col;
+    for (int row = col + 1; row < 7; ++row) {
+      if (std::abs(a[row][col]) > std::abs(a[pivot][col])) pivot = row;
+    }
+    if (pivot != col) std::swap(a[pivot], a[col]);
+    const double inverse = 1.0 / a[col][col];  // 0: inf/NaN, refused by the caller
+    for (int row = col + 1; row < 7; ++row) {
+      const double f = a[row][col] * inverse;
+      for (int k = col + 1; k < 8; ++k) a[row][k] -= f * a[col][k];
+    }
+  }
+  Vector7 x;
+  for (int row = 6; row >= 0; --row) {
+    double v = a[row][7];
+    for (int k = row + 1; k < 7; ++k) v -= a[row][k] * x[k];
+    x[row] = v / a[row][row];
+  }
+  return x;
 }
 
 FullCarEquilibrium solve(const FullCarColumn& p) {
@@ -153,7 +177,7 @@ FullCarEquilibrium solve(const FullCarColumn& p) {
   // Linear springs: R is affine, so one solve from 0 is exact.
   const Vector7 zero = Vector7::Zero();
   const Vector7 r0 = residuals(s, zero, false, &j);
-  Vector7 x = -linearSolve(s, j, r0);
+  Vector7 x = -linearSolve(j, r0);
   if (!x.allFinite()) fail("non-finite linear-spring solution", 0);
   int it = 0;
   bool converged = false;
@@ -162,7 +186,7 @@ FullCarEquilibrium solve(const FullCarColumn& p) {
     if (it == kMaxIterations) fail("no convergence", it);
     const Vector7 r = residuals(s, x, true, &j);
     if (!r.allFinite()) fail("non-finite residual", it);
-    const Vector7 step = -linearSolve(s, j, r);
+    const Vector7 step = -linearSolve(j, r);
     if (!step.allFinite()) fail("non-finite Newton step", it);
     ++it;
     const double scale = std::max(x.cwiseAbs().maxCoeff(), std::numeric_limits<double>::min());
