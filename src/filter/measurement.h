@@ -29,6 +29,9 @@ struct Measurement {
   // one before by input_correlation[i].
   Eigen::MatrixXd input_slopes{};
   Eigen::VectorXd input_correlation{};
+  // A recognised stop's sample (road-free, measurement.standstill): the
+  // vehicle values' walk over the interval it ends is filter.drift alone.
+  bool standing = false;
 };
 
 // What input slopes s and correlations rho add to a sample's R (the noise

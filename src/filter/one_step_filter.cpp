@@ -180,6 +180,11 @@ double OneStepFilter::reopenChance(int dof) {
   return p;
 }
 
+const Eigen::VectorXd& OneStepFilter::driftFor(const Measurement& m) const {
+  return m.standing && settings_.drift_standing.size() != 0 ? settings_.drift_standing
+                                                            : settings_.drift;
+}
+
 OneStepFilter::~OneStepFilter() = default;
 
 void OneStepFilter::cancelRerun() { rerun_.reset(); }
@@ -542,7 +547,7 @@ bool OneStepFilter::reloadFromChange(StepResult& r) {
     HorizonStep h;
     int gated = 0;
     for (const Measurement& m : again) {
-      if (settings_.drift.size() != 0) trial->drift(settings_.drift, m.time - trial->lastTime());
+      if (settings_.drift.size() != 0) trial->drift(driftFor(m), m.time - trial->lastTime());
       h = trial->process(m, settings_.noise, gate, settings_.support == SupportRule::kDamp);
       verdicts.push_back({h.gated, h.damping < 1.0});
       gated += h.gated;
@@ -579,7 +584,7 @@ bool OneStepFilter::reloadFromChange(StepResult& r) {
 
 void OneStepFilter::horizonUpdate(const Measurement& m, double dt, StepResult& r) {
   const int np = propagator_->parameterCount();
-  if (settings_.drift.size() != 0) horizon_->drift(settings_.drift, dt);
+  if (settings_.drift.size() != 0) horizon_->drift(driftFor(m), dt);
   t_ = m.time;
   r.index = ++samples_;
   r.time = m.time;
@@ -614,7 +619,7 @@ void OneStepFilter::collocationUpdate(const Measurement& m, double dt, StepResul
   r.forecast = propagator_->forecast(x_, t_, m.time);
   const int ns = propagator_->stateCount();
   if (r.forecast.ok && settings_.drift.size() != 0) {
-    applyDrift(x_, ns, settings_.drift, dt);
+    applyDrift(x_, ns, driftFor(m), dt);
   }
   t_ = m.time;
   r.index = ++samples_;

@@ -169,6 +169,8 @@ class OneStepFilter {
   // The re-open rule's chance per sample by dof (-1: not yet simulated; 0
   // with re-opens off): looked up once per channel count, not per sample.
   double reopenChance(int dof);
+  // The walk over the interval sample m ends (standing: drift_standing).
+  const Eigen::VectorXd& driftFor(const Measurement& m) const;
   std::vector<double> reopen_chance_;
   StepResult processSample(const Measurement& m);
   int restarts_ = 0;

@@ -109,6 +109,10 @@ struct NuisanceValue {
 struct SafeguardSettings {
   SupportRule support = SupportRule::kIgnore;
   Eigen::VectorXd drift;  // per parameter, random-walk std per sqrt(s) (empty = none)
+  // Over an interval that ends at a standing sample (Measurement::standing):
+  // filter.drift without drift_relative's share (dampers and tyres change
+  // with the work they do, and a stop does none). Empty = drift.
+  Eigen::VectorXd drift_standing;
   ReopenSettings reopen;
   RelinearizeSettings relinearize;  // one-step
   MovingHorizonSettings horizon;    // one-step, window > 0: linearised at the mean

@@ -297,6 +297,7 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
   // The same as fractions of each parameter's nominal (a vehicle_file's
   // values scale them), added in quadrature.
   const std::vector<double> relative = perParameter("drift_relative", "one fraction");
+  const std::vector<double> absolute = drift;
   for (std::size_t i = 0; i < relative.size(); ++i) {
     const double r = relative[i];
     if (!(r >= 0.0) || !std::isfinite(r)) f.fail("drift_relative", std::to_string(r), "fractions >= 0");
@@ -305,6 +306,11 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
     drift[i] = std::hypot(drift[i], r * std::abs(c.uncertain[i].nominal));
   }
   s.drift = Eigen::Map<const Eigen::VectorXd>(drift.data(), static_cast<Eigen::Index>(drift.size()));
+  s.drift_standing.resize(0);
+  if (drift != absolute) {  // a relative share: not while standing
+    s.drift_standing = Eigen::VectorXd::Zero(s.drift.size());
+    for (std::size_t i = 0; i < absolute.size(); ++i) s.drift_standing[static_cast<Eigen::Index>(i)] = absolute[i];
+  }
   YamlMapReader r = f.map("reopen");
   std::string mode = toString(s.reopen.mode);
   r.text("mode", mode);

@@ -216,8 +216,8 @@ struct EstimatorConfig {
   PosteriorGrid grid;
   HealthConfig health;
   // filter.support, .drift, .reopen, .relinearize; damp unless configured.
-  SafeguardSettings safeguards{SupportRule::kDamp, Eigen::VectorXd(), ReopenSettings(),
-                               RelinearizeSettings(), MovingHorizonSettings()};
+  SafeguardSettings safeguards{SupportRule::kDamp,   Eigen::VectorXd(),     Eigen::VectorXd(),
+                               ReopenSettings(),     RelinearizeSettings(), MovingHorizonSettings()};
   PdfConfig pdf;
   NodeConfig node;
 

@@ -33,7 +33,7 @@ EstimatorConfig pruneTolerances(const EstimatorConfig& c, const PriorSensitivity
   if (!(c.tolerances_prune > 0.0)) return out;
   out.uncertain.resize(c.loadCount());
   out.tolerance_count = 0;
-  std::vector<double> drift;
+  std::vector<double> drift, standing;
   for (int i = 0; i < static_cast<int>(c.uncertain.size()); ++i) {
     const bool tolerance = i >= c.loadCount();
     if (tolerance && s.largestTotal(i) < c.tolerances_prune) {
@@ -50,9 +50,12 @@ EstimatorConfig pruneTolerances(const EstimatorConfig& c, const PriorSensitivity
       ++out.tolerance_count;
     }
     if (c.safeguards.drift.size() != 0) drift.push_back(c.safeguards.drift[i]);
+    if (c.safeguards.drift_standing.size() != 0) standing.push_back(c.safeguards.drift_standing[i]);
   }
   out.safeguards.drift = Eigen::Map<const Eigen::VectorXd>(
       drift.data(), static_cast<Eigen::Index>(drift.size()));
+  out.safeguards.drift_standing = Eigen::Map<const Eigen::VectorXd>(
+      standing.data(), static_cast<Eigen::Index>(standing.size()));
   // truth.xi and the schedule follow the parameters they belong to.
   std::vector<bool> kept(c.uncertain.size(), false);
   for (std::size_t i = 0, k = 0; i < c.uncertain.size() && k < out.uncertain.size(); ++i) {

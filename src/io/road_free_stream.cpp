@@ -269,6 +269,7 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   ++samples_;
   observeInterval(m.time);
   Measurement o = onlyChannels(m, outputs_);
+  o.standing = still.standing;
   for (std::size_t j = 0; j < o.channels.size(); ++j) {
     if (o.channels[j] != accel_z_) continue;
     accel_z_sum_ += o.values[static_cast<Eigen::Index>(j)];

@@ -96,9 +96,14 @@ TEST(MovingHorizon, TheMassScaleKeepsItsPrior) {
   EXPECT_GT(body_walked.xi_mean / body_walked.xi_stddev, 1.0);
 }
 
+// The control: the collocation filter (the paper's linearisation) on the same
+// minute without the vehicle values' walk is flagged or wrong (measured:
+// unhealthy, 7.6 std). The walk changes that: at 2e-4 per sqrt(s) healthy
+// and 5.1 std off (silent), at vehicle_imu.yaml's 5e-4 healthy and within 3.
 TEST(MovingHorizon, TheCollocationFilterOnTheSameDriveIsFlagged) {
   YAML::Node root = vehicleImu(60.0, "tare");
   root["filter"]["linearization"] = "collocation";
+  root["filter"].remove("drift_relative");
   const OfflineResult r = estimate(root, 1);
   EXPECT_TRUE(!r.healthy || worstError(r) > 3.0);
 }

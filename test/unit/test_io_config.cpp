@@ -133,6 +133,24 @@ TEST(Config, TooFewCollocationPointsAreRefusedNamingTheKey) {
                                         kMinimal, "ok.yaml"));
 }
 
+TEST(Config, TheRelativeWalkIsLeftOutAtAStop) {
+  // drift [2, 0] kg and 1e-3 of d_CG's nominal: while driving both, in
+  // quadrature; over an interval ending at a stop filter.drift alone.
+  const EstimatorConfig c = parseConfigString(
+      std::string("filter: {drift: [2.0, 0.0], drift_relative: [1.0e-3, 1.0e-3]}\n") + kMinimal,
+      "ok.yaml");
+  ASSERT_EQ(c.safeguards.drift.size(), 2);
+  EXPECT_DOUBLE_EQ(c.safeguards.drift[0], std::hypot(2.0, 0.2));
+  EXPECT_DOUBLE_EQ(c.safeguards.drift[1], 0.762e-3);
+  ASSERT_EQ(c.safeguards.drift_standing.size(), 2);
+  EXPECT_EQ(c.safeguards.drift_standing[0], 2.0);
+  EXPECT_EQ(c.safeguards.drift_standing[1], 0.0);
+  // Without a relative share nothing differs at a stop.
+  const EstimatorConfig absolute =
+      parseConfigString(std::string("filter: {drift: [2.0, 0.0]}\n") + kMinimal, "ok.yaml");
+  EXPECT_EQ(absolute.safeguards.drift_standing.size(), 0);
+}
+
 TEST(Config, NestedSparseGridKey) {
   EXPECT_FALSE(parseConfigString(kMinimal, "ok.yaml").collocation.nested);
   const EstimatorConfig c = parseConfigString(
