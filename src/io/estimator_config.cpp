@@ -306,10 +306,10 @@ void readSafeguards(YamlMapReader& f, EstimatorConfig& c) {
     drift[i] = std::hypot(drift[i], r * std::abs(c.uncertain[i].nominal));
   }
   s.drift = Eigen::Map<const Eigen::VectorXd>(drift.data(), static_cast<Eigen::Index>(drift.size()));
-  s.drift_standing.resize(0);
   if (drift != absolute) {  // a relative share: not while standing
     s.drift_standing = Eigen::VectorXd::Zero(s.drift.size());
-    for (std::size_t i = 0; i < absolute.size(); ++i) s.drift_standing[static_cast<Eigen::Index>(i)] = absolute[i];
+    s.drift_standing.head(static_cast<Eigen::Index>(absolute.size())) =
+        Eigen::Map<const Eigen::VectorXd>(absolute.data(), static_cast<Eigen::Index>(absolute.size()));
   }
   YamlMapReader r = f.map("reopen");
   std::string mode = toString(s.reopen.mode);
