@@ -130,7 +130,7 @@ void appendG17(std::string& out, double v) {
   if (!exactG17(v, text, &end)) {
     end = std::to_chars(text, text + sizeof(text), v, std::chars_format::general, 17).ptr;
   }
-  out.append(text, end);
+  out.append(text, static_cast<std::size_t>(end - text));  // (pointer, count): no replace path
 }
 
 std::optional<double> parseFiniteDouble(const std::string& token) {

@@ -473,9 +473,13 @@ std::string FullCarModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>&
 }
 
 FullCarEquilibrium FullCarModel::equilibrium(const Eigen::Ref<const Eigen::VectorXd>& params) const {
-  thread_local EquilibriumMemo memo;
+  // On the heap, made at the thread's first solve: a thread_local table of
+  // this size would sit in the library's static TLS, which every thread of
+  // the process (PDF workers, the writer, ...) zeroes when it starts.
+  thread_local std::unique_ptr<EquilibriumMemo> memo;
+  if (!memo) memo = std::make_unique<EquilibriumMemo>();
   const FullCarEquilibriumKey key = fullCarEquilibriumKey(FullCarColumn(params.data()));
-  EquilibriumMemo::Slot& slot = memo.slots[EquilibriumMemo::slotOf(key)];
+  EquilibriumMemo::Slot& slot = memo->slots[EquilibriumMemo::slotOf(key)];
   if (!slot.used || std::memcmp(slot.key.data(), key.data(), sizeof(double) * key.size()) != 0) {
     slot.used = true;
     slot.key = key;

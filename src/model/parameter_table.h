@@ -90,6 +90,10 @@ class ParameterTable {
   std::vector<ParameterSpec> specs_;
   std::vector<std::string> names_;
   std::vector<std::vector<int>> upper_sum_;  // resolved indices
+  // admissible()'s view of the domains: contiguous bounds (upper = +inf where
+  // a sum bounds the entry) and the entries bounded by a sum.
+  std::vector<double> lower_, upper_, zero_allowed_;  // zero_allowed_: 1 or 0
+  std::vector<int> summed_;
 };
 
 }  // namespace pc_ekf
