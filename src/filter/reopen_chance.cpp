@@ -126,11 +126,34 @@ double simulate(int window, int dof, double confidence, int after) {
   return static_cast<double>(reopens) / static_cast<double>(kSamples);
 }
 
-}  // namespace
+// simulate(20, dof, 0.99, 20) for dof = 1..24: the rule every shipped config
+// with re-opens sets (test_filter_safeguard_rates recomputes each entry).
+constexpr double kShippedRule[] = {
+    0x1.a36e2eb1c432dp-16, 0x0p+0, 0x1.4f8b588e368f1p-18, 0x1.4f8b588e368f1p-18,
+    0x1.4f8b588e368f1p-18, 0x1.4f8b588e368f1p-18, 0x1.4f8b588e368f1p-17, 0x1.4f8b588e368f1p-17,
+    0x1.4f8b588e368f1p-17, 0x0p+0, 0x0p+0, 0x0p+0,
+    0x0p+0, 0x0p+0, 0x0p+0, 0x0p+0,
+    0x0p+0, 0x0p+0, 0x0p+0, 0x0p+0,
+    0x0p+0, 0x0p+0, 0x0p+0, 0x0p+0};
+constexpr int kShippedDof = static_cast<int>(sizeof kShippedRule / sizeof kShippedRule[0]);
 
-double chanceReopenPerSample(int window, int dof, double confidence, int after) {
+void checkArguments(int window, int dof, double confidence, int after) {
   if (window < 1 || dof < 1 || after < 1 || !(confidence > 0.0 && confidence < 1.0)) {
     throw std::invalid_argument("chanceReopenPerSample: need window, dof, after >= 1 and 0 < confidence < 1");
+  }
+}
+
+}  // namespace
+
+double simulateChanceReopenPerSample(int window, int dof, double confidence, int after) {
+  checkArguments(window, dof, confidence, after);
+  return simulate(window, dof, confidence, after);
+}
+
+double chanceReopenPerSample(int window, int dof, double confidence, int after) {
+  checkArguments(window, dof, confidence, after);
+  if (window == 20 && confidence == 0.99 && after == 20 && dof <= kShippedDof) {
+    return kShippedRule[dof - 1];
   }
   static std::mutex mutex;
   static std::map<std::tuple<int, int, double, int>, double> cache;

@@ -15,4 +15,10 @@ namespace pc_ekf {
 // argument set by a seeded simulation of the rule (cached; thread-safe).
 double chanceReopenPerSample(int window, int dof, double confidence, int after);
 
+// The simulation itself, uncached and without the table of the shipped
+// rule (window 20, confidence 0.99, after 20, 1 to 24 dof), which holds its
+// values so that no process spends its start-up on them; the test checks
+// the table against it.
+double simulateChanceReopenPerSample(int window, int dof, double confidence, int after);
+
 }  // namespace pc_ekf
