@@ -462,8 +462,13 @@ FullCarModel::FullCarModel(ModelParameters nominal, std::shared_ptr<const Contac
 }
 
 std::string FullCarModel::invalidReason(const Eigen::Ref<const Eigen::VectorXd>& params) const {
-  const std::string why = description().parameters().violation(params);
-  if (!why.empty()) return why;
+  // The table's branch-free test first (every point of every forecast); the
+  // message only for a point that fails it.
+  const ParameterTable& table = description().parameters();
+  if (params.size() != table.size() || !table.admissible(params.data())) {
+    const std::string why = table.violation(params);
+    if (!why.empty()) return why;
+  }
   try {
     equilibrium(params);
   } catch (const std::runtime_error& e) {

@@ -68,7 +68,6 @@ std::string ParameterTable::violation(const Eigen::Ref<const Eigen::VectorXd>& v
     return "expected " + std::to_string(size()) + " parameters, got " +
            std::to_string(values.size());
   }
-  if (admissible(values.data())) return "";  // the common case, without a branch per entry
   for (int i = 0; i < size(); ++i) {
     if (!std::isfinite(values[i])) return outOfDomain(names_[i], values[i], "is not finite");
   }
