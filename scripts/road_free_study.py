@@ -122,7 +122,10 @@ def config_text(road, duration, zero, vehicle, mass, position, seed):
     end = text.index("  sensor:", start)
     xi_m = germ(text, "added_mass", mass)
     xi_d = germ(text, "added_mass_position", position)
-    truth = "  road: %s\n  xi: [%.10f, %.10f]\n" % (road, xi_m, xi_d)
+    xi = [xi_m, xi_d]
+    if "- name: added_mass_height" in text:  # the load 0.40 m above the mount plane
+        xi.append(germ(text, "added_mass_height", 0.40))
+    truth = "  road: %s\n  xi: [%s]\n" % (road, ", ".join("%.10f" % v for v in xi))
     if vehicle:
         truth += "  vehicle: {%s}\n" % ", ".join("%s: %s" % kv for kv in OFF.items())
     return text[:start] + truth + text[end:]

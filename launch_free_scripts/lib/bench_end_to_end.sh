@@ -9,7 +9,7 @@
 #   rtf_n11_end_to_end       test/benchmarks/roll_plane_tolerances.yaml (n = 11)
 #   full_car_tolerances_rtf  test/benchmarks/full_car_tolerances.yaml (n = 12)
 #   rtf_paper_end_to_end     config/speed_bump.yaml (n = 2, N = 10)
-#   road_free_rtf_end_to_end config/vehicle_imu.yaml (road-free, n = 16) on its own
+#   road_free_rtf_end_to_end config/vehicle_imu.yaml (road-free, n = 20) on its own
 #                            synthetic 10 s, 200 Hz drive (ISO B), read as a CSV
 #   live_rtf_end_to_end      config/vehicle_live.yaml as shipped (n = 15) but its
 #                            road: the paper bump, N = 100 over 3 s, synthesised
@@ -18,8 +18,10 @@
 #   full_car_imu_rtf_end_to_end  config/full_car_imu.yaml (road-free full car with
 #                            heights, bars, odometry, n = 14) on its own synthetic
 #                            10 s, 200 Hz drive (a braking, a lane change), read as a CSV
-#   driving_rtf_end_to_end   config/turns.yaml (roll plane with heights and a bar on
-#                            its course of turns, n = 3) sampled at 200 Hz over 10 s
+#   driving_rtf_end_to_end   config/vehicle_imu.yaml (road-free with heights, a bar,
+#                            odometry, n = 20) on a 10 s, 200 Hz drive of a lane
+#                            change and a turn on ISO B (its synthetic drive with that
+#                            course as truth.road), read as a CSV
 set -uo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 source "$here/common.sh"
@@ -65,12 +67,28 @@ if "$bin/synthesize_bag" --config "$car_imu" --output "$out/full_car_imu.bag" \
   --csv "$out/full_car_imu.csv" 2>"$out/full_car_imu_synthesis.err"; then
   car_imu_wall=$(walls "$car_imu" full_car_imu --measurements "$out/full_car_imu.csv")
 fi
-# turns.yaml as shipped but sampled at 200 Hz over 10 s (its synthetic drive).
+# vehicle_imu.yaml as shipped, its synthetic drive turning (truth.road a course).
 driving_wall=null
-sed -E "s/^sampling: .*/sampling: {samples: 2000, duration: 10.0}/" \
-  "$PC_EKF_ROOT/config/turns.yaml" >"$out/driving.yaml" &&
-  grep -q "samples: 2000" "$out/driving.yaml" &&
-  driving_wall=$(walls "$out/driving.yaml" driving)
+/usr/bin/python3 - "$imu" "$out/driving.yaml" <<'PY' &&
+import sys
+text = open(sys.argv[1]).read()
+start = text.index("\n  road:", text.index("\ntruth:"))
+end = text.index("\n  sensor:", start)
+course = """
+  road:
+    source: course
+    speed_kmh: 72.0
+    iso8608: {class: B, seed: 1}
+    course:
+      - {type: iso8608, duration: 2.0}
+      - {type: lane_change, duration: 2.5, lateral_acceleration: 4.0, surface: iso8608}
+      - {type: turn, duration: 4.5, lateral_acceleration: 3.5, ramp: 1.0, surface: iso8608}
+      - {type: iso8608, duration: 1.0}"""
+open(sys.argv[2], "w").write(text[:start] + course + text[end:])
+PY
+  "$bin/synthesize_bag" --config "$out/driving.yaml" --output "$out/driving.bag" \
+    --csv "$out/driving.csv" 2>"$out/driving_synthesis.err" &&
+  driving_wall=$(walls "$out/driving.yaml" driving --measurements "$out/driving.csv")
 # The shipped live configs, every section as shipped but the road (a topic
 # there): the speed bump, N = 100 over 3 s.
 as_shipped_on_bump() {  # as_shipped_on_bump CONFIG OUT

@@ -87,8 +87,9 @@ void readIsoClass(YamlMapReader& r, char& road_class) {
 }
 
 // A manoeuvre segment's keys (turn, lane_change, slalom: road_input.h's
-// ManoeuvreSettings), driven at speed_kmh on a flat road or on an ISO 8608 one
-// (surface: iso8608, with an iso8608 segment's keys and defaults).
+// ManoeuvreSettings), driven at speed_kmh on a flat road, on an ISO 8608 one
+// (surface: iso8608, with an iso8608 segment's keys and defaults) or on a
+// measured profile (surface: profile: file, default road.profile.file; start).
 void readManoeuvre(YamlMapReader& e, const RoadConfig& road, std::size_t index,
                    CourseSegment& seg) {
   ManoeuvreSettings& m = seg.manoeuvre;
@@ -110,8 +111,22 @@ void readManoeuvre(YamlMapReader& e, const RoadConfig& road, std::size_t index,
   if (seg.type == CourseSegment::Type::kSlalom) e.number("frequency", m.frequency, 0.0, kInf, true);
   std::string surface = "flat";
   e.text("surface", surface);
-  if (surface != "flat" && surface != "iso8608") {
-    e.fail("surface", "'" + surface + "'", "flat or iso8608");
+  if (surface != "flat" && surface != "iso8608" && surface != "profile") {
+    e.fail("surface", "'" + surface + "'", "flat, iso8608 or profile");
+  }
+  if (surface == "profile") {
+    std::string file = road.profile_file;
+    e.text("file", file);
+    if (file.empty()) {
+      e.fail("file", "(empty)", "a road profile CSV path (s,left,right in m) for surface profile");
+    }
+    e.number("start", m.profile_start, 0.0, kInf);
+    try {
+      m.measured = readMeasuredProfileCsv(file);
+    } catch (const std::invalid_argument& ex) {
+      e.fail("file", "'" + file + "'", std::string("a readable road profile: ") + ex.what());
+    }
+    return;
   }
   m.rough = surface == "iso8608";
   if (!m.rough) return;

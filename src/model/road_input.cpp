@@ -4,6 +4,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <utility>
 
 #include "pc_ekf/model/course_motion.h"
 #include "pc_ekf/model/road_profile.h"
@@ -49,6 +50,40 @@ class CourseIso8608 : public RoadInput {
   Iso8608Profile profile_;
   double speed_, accel_, lead_in_;
   Eigen::Vector2d from_;
+};
+
+// A manoeuvre on a measured profile in its own time tau (CourseRoad): both
+// tracks at distance start + speed tau (+ accel tau^2 / 2), shifted so that
+// the segment starts at `from` (the profile's own offset there taken out).
+class CourseMeasured : public RoadInput {
+ public:
+  CourseMeasured(std::shared_ptr<const TrackProfile> profile, double start, double speed,
+                 const Eigen::Vector2d& from, double accel)
+      : profile_(std::move(profile)), start_(start), speed_(speed), accel_(accel),
+        shift_(from - profile_->bothTracks(start)) {}
+  Eigen::Vector2d height(double tau) const override {
+    return profile_->bothTracks(start_ + distance(tau)) + shift_;
+  }
+  // The profile's kinks, at the times the wheels reach them.
+  std::vector<double> breakpoints(double t0, double t1) const override {
+    std::vector<double> out;
+    const double a = std::max(t0, 0.0);
+    if (!(t1 > a)) return out;
+    for (double s : profile_->kinks(start_ + distance(a), start_ + distance(t1))) {
+      const double d = s - start_;
+      const double tau = accel_ == 0.0 ? d / speed_
+                                       : (std::sqrt(std::max(0.0, speed_ * speed_ + 2.0 * accel_ * d)) -
+                                          speed_) / accel_;
+      if (tau > t0 && tau < t1) out.push_back(tau);
+    }
+    return out;
+  }
+
+ private:
+  double distance(double tau) const { return speed_ * tau + 0.5 * accel_ * tau * tau; }
+  std::shared_ptr<const TrackProfile> profile_;
+  double start_, speed_, accel_;
+  Eigen::Vector2d shift_;
 };
 
 std::string describeTime(const std::string& what, double t) {
@@ -139,6 +174,17 @@ CourseRoad::CourseRoad(std::vector<CourseSegment> segments) {
       d = speedBumpDuration(seg.speed_bump);
     } else if (seg.type == CourseSegment::Type::kSine) {
       roads_.push_back(std::make_unique<SineRoad>(seg.sine));
+    } else if (seg.isManoeuvre() && seg.manoeuvre.measured) {
+      if (!(seg.speed_kmh >= 0.0) || !std::isfinite(seg.speed_kmh) ||
+          !std::isfinite(seg.manoeuvre.profile_start) ||
+          (seg.speed_kmh == 0.0 && seg.longitudinalAcceleration() <= 0.0)) {
+        throw std::invalid_argument("CourseRoad: segment " + std::to_string(i) +
+                                    " (surface profile): the vehicle must move along it");
+      }
+      roads_.push_back(std::make_unique<CourseMeasured>(
+          seg.manoeuvre.measured, seg.manoeuvre.profile_start, seg.speed_kmh / 3.6, level_.back(),
+          seg.longitudinalAcceleration()));
+      blends = true;
     } else if (seg.type == CourseSegment::Type::kIso8608 ||
                (seg.isManoeuvre() && seg.manoeuvre.rough)) {
       const std::string who = "CourseRoad: segment " + std::to_string(i) + " (iso8608)";

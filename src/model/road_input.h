@@ -10,6 +10,7 @@
 namespace pc_ekf {
 
 class HorizontalMotion;
+class TrackProfile;
 
 // The road under any number of contacts (a model's contact names, in order).
 class ContactRoad {
@@ -105,9 +106,10 @@ struct Iso8608Settings {
 //  - lane_change: one period of a_y = lateral_acceleration sin(2 pi t / duration)
 //    (out to one side and straight again: a lane's offset, ISO 3888-1-like);
 //  - slalom: a_y = lateral_acceleration sin(2 pi frequency t).
-// The road under it: flat (the level where the segment before left it) or,
+// The road under it: flat (the level where the segment before left it),
 // rough, the ISO 8608 road of the segment's iso8608 settings (as an iso8608
-// segment).
+// segment), or a measured profile driven from `profile_start` m into it,
+// shifted to start at that level.
 // Longitudinal manoeuvres (course segments brake, accelerate): the speed
 // falls (brake) or rises (accelerate) from speed_kmh at a constant rate,
 // `longitudinal` m/s^2 (> 0; the end speed must stay >= 0), on the same
@@ -119,6 +121,8 @@ struct ManoeuvreSettings {
   double ramp = 1.0;                  // turn, s
   double frequency = 0.5;             // slalom, Hz
   bool rough = false;                 // surface iso8608 (else flat)
+  std::shared_ptr<const TrackProfile> measured;  // surface profile (null: not)
+  double profile_start = 0.0;         // m into the measured profile
 };
 
 // One piece of a course road; durations in s.

@@ -15,12 +15,13 @@
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/io/road_free_stream.h"
+#include "vehicle_imu_straight.h"
 
 namespace pc_ekf {
 namespace {
 
 YAML::Node vehicleImu(double duration, const std::string& zero) {
-  YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+  YAML::Node root = vehicleImuWithoutHeights();
   root["measurement"]["zero"] = zero;
   root["sampling"]["samples"] = static_cast<int>(200 * duration);
   root["sampling"]["duration"] = duration;

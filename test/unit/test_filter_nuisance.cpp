@@ -13,6 +13,7 @@
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/io/road_free_stream.h"
+#include "vehicle_imu_straight.h"
 
 namespace pc_ekf {
 namespace {
@@ -20,7 +21,7 @@ namespace {
 // vehicle_imu.yaml over `duration` s at 200 Hz, a load off its nominal
 // (245 kg at 0.686 m: xi 0.3, -0.4).
 YAML::Node vehicleImu(double duration) {
-  YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+  YAML::Node root = vehicleImuWithoutHeights();
   root["sampling"]["samples"] = static_cast<int>(200 * duration);
   root["sampling"]["duration"] = duration;
   YAML::Node xi;

@@ -75,6 +75,19 @@ const char* kFullCar =
     "uncertain:\n"
     "  - {name: added_mass, relative_range: 0.5}\n";
 
+// A manoeuvre on a measured profile (its file must exist to be read).
+std::string measuredSurface() {
+  const std::string file = ::testing::TempDir() + "/schema_profile.csv";
+  std::ofstream(file) << "s,left,right\n0,0,0\n100,0.01,0.02\n";
+  return "uncertain:\n"
+         "  - {name: added_mass, relative_range: 0.5}\n"
+         "road:\n"
+         "  source: course\n"
+         "  course:\n"
+         "    - {type: slalom, duration: 2.0, speed_kmh: 36.0, surface: profile, file: " + file +
+         ", start: 5.0}\n";
+}
+
 // Read before the YamlMapReader sees the config (mergeVehicleFile).
 const std::set<std::string> kReadBeforeTheReader = {"vehicle_file"};
 
@@ -125,7 +138,7 @@ std::string tablePath(const std::string& read_path) {
       "road.course[i].class", "road.course[i].seed",     "road.course[i].correlation",
       "road.course[i].lateral_acceleration", "road.course[i].radius", "road.course[i].ramp",
       "road.course[i].frequency", "road.course[i].surface", "road.course[i].deceleration",
-      "road.course[i].acceleration"};
+      "road.course[i].acceleration", "road.course[i].file", "road.course[i].start"};
   if (after("road.course[i].") && !segment_rows.count(p)) {
     return "road.course[i].<speed_bump or sine key>";
   }
@@ -176,7 +189,7 @@ bool sameUpToNote(const std::string& documented, const std::string& code) {
 
 TEST(ConfigSchema, EveryKeyTheParserAcceptsIsInTheTable) {
   const auto table = tableByPath();
-  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar, kDatasheet})) {
+  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar, kDatasheet, measuredSurface()})) {
     if (!isKey(rec)) continue;
     EXPECT_TRUE(table.count(path))
         << "the parser accepts '" << path << "' but src/io/config_schema.cpp does not list it";
@@ -184,7 +197,7 @@ TEST(ConfigSchema, EveryKeyTheParserAcceptsIsInTheTable) {
 }
 
 TEST(ConfigSchema, EveryKeyInTheTableIsAccepted) {
-  const auto keys = recorded({kDefaults, kBranches, kFullCar, kDatasheet});
+  const auto keys = recorded({kDefaults, kBranches, kFullCar, kDatasheet, measuredSurface()});
   for (const ConfigKey& k : configSchema()) {
     if (kReadBeforeTheReader.count(k.path)) continue;
     const auto it = keys.find(k.path);
@@ -209,7 +222,7 @@ TEST(ConfigSchema, TypesAreWhatTheParserReads) {
       {"number or list", {"number", "numbers"}},
       {"map", {"map"}},             {"list", {"list"}}};
   const auto table = tableByPath();
-  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar, kDatasheet})) {
+  for (const auto& [path, rec] : recorded({kDefaults, kBranches, kFullCar, kDatasheet, measuredSurface()})) {
     if (!isKey(rec) || !table.count(path)) continue;
     std::set<std::string> words;  // "number or numbers" -> {number, numbers}
     const std::string type = table.at(path)->type;

@@ -4,8 +4,12 @@
 // that records speed and gyro_z.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/model/course_motion.h"
@@ -104,6 +108,71 @@ TEST(CourseMotion, RoughSurfaceIsTheIsoRoad) {
   const CourseRoad a({turn}), b({iso});
   for (double t : {0.1, 1.3, 2.9}) EXPECT_EQ(a.height(t), b.height(t));
   EXPECT_GT(std::abs(a.height(1.3)[0]), 0.0);
+}
+
+// A slalom on a measured profile: the profile at start + V tau, shifted to
+// begin where the ISO segment before it left the road; the profile's kinks are
+// breakpoints at the times the wheels reach them (under a braking too), and
+// the segment leaves the heights where it ended.
+TEST(CourseMotion, MeasuredSurfaceIsTheProfileFromTheLevel) {
+  const std::string path = ::testing::TempDir() + "/course_measured_profile.csv";
+  {
+    std::ofstream f(path);
+    f << "s,left,right\n0,0.01,-0.02\n10,0.03,0.00\n20,0.00,0.05\n200,0.02,0.01\n";
+  }
+  const EstimatorConfig c = parseConfigString(
+      "uncertain: [{name: added_mass, relative_range: 0.5}]\n"
+      "road:\n"
+      "  source: course\n"
+      "  iso8608: {class: B, seed: 4}\n"
+      "  course:\n"
+      "    - {type: iso8608, duration: 1.0, speed_kmh: 36.0}\n"
+      "    - {type: slalom, duration: 4.0, speed_kmh: 36.0, surface: profile, file: " + path +
+          ", start: 5.0}\n"
+      "    - {type: brake, duration: 2.0, speed_kmh: 36.0, deceleration: 2.0, surface: profile,\n"
+      "       file: " + path + "}\n",
+      "measured.yaml");
+  ASSERT_EQ(c.road.course.size(), 3u);
+  ASSERT_TRUE(c.road.course[1].manoeuvre.measured);
+  EXPECT_FALSE(c.road.course[1].manoeuvre.rough);
+  EXPECT_EQ(c.road.course[1].manoeuvre.profile_start, 5.0);
+  const CourseRoad road(c.road.course);
+  const Eigen::Vector2d level = road.levels()[1];
+  EXPECT_GT(level.norm(), 0.0);
+  const auto profile = [](double s) {  // the CSV, interpolated by hand
+    const double x[] = {0, 10, 20, 200}, l[] = {0.01, 0.03, 0.00, 0.02}, r[] = {-0.02, 0.0, 0.05, 0.01};
+    int i = s < 10 ? 0 : s < 20 ? 1 : 2;
+    const double w = (s - x[i]) / (x[i + 1] - x[i]);
+    return Eigen::Vector2d((1 - w) * l[i] + w * l[i + 1], (1 - w) * r[i] + w * r[i + 1]);
+  };
+  for (double tau : {0.0, 0.3, 0.5, 1.7, 3.9}) {
+    const Eigen::Vector2d want = profile(5.0 + 10.0 * tau) - profile(5.0) + level;
+    EXPECT_NEAR((road.height(1.0 + tau) - want).norm(), 0.0, 1e-15) << tau;
+  }
+  // Kinks at s = 10 and 20 m: 0.5 s and 1.5 s into the slalom.
+  const std::vector<double> b = road.breakpoints(1.01, 4.9);
+  EXPECT_NE(std::find_if(b.begin(), b.end(), [](double t) { return std::abs(t - 1.5) < 1e-12; }), b.end());
+  EXPECT_NE(std::find_if(b.begin(), b.end(), [](double t) { return std::abs(t - 2.5) < 1e-12; }), b.end());
+  // Braking from 10 m/s at 2 m/s^2: s = 10 m at tau = (10 - sqrt(100 - 40)) / 2 = 1.127 s.
+  const Eigen::Vector2d level2 = road.levels()[2];
+  const double tau = (10.0 - std::sqrt(100.0 - 40.0)) / 2.0;
+  const std::vector<double> b2 = road.breakpoints(5.01, 6.99);
+  EXPECT_NE(std::find_if(b2.begin(), b2.end(), [&](double t) { return std::abs(t - 5.0 - tau) < 1e-12; }),
+            b2.end());
+  const double s = 10.0 * 1.5 - 0.5 * 2.0 * 1.5 * 1.5;
+  EXPECT_NEAR((road.height(6.5) - (profile(s) - profile(0.0) + level2)).norm(), 0.0, 1e-15);
+  EXPECT_NEAR((level2 - (profile(45.0) - profile(5.0) + level)).norm(), 0.0, 1e-15);
+  // A file that is not there is named with its key.
+  try {
+    parseConfigString("uncertain: [{name: added_mass, relative_range: 0.5}]\n"
+                      "road: {source: course, course: [{type: turn, duration: 1.0, surface: profile, "
+                      "file: /nonexistent/road.csv}]}\n",
+                      "bad.yaml");
+    ADD_FAILURE() << "no error";
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("road.course[0].file"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("/nonexistent/road.csv"), std::string::npos) << e.what();
+  }
 }
 
 // The config's course keys, and a synthetic drive of it recording speed and

@@ -18,12 +18,13 @@
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/model/model_type.h"
 #include "pc_ekf/io/road_free_stream.h"
+#include "vehicle_imu_straight.h"
 
 namespace pc_ekf {
 namespace {
 
 EstimatorConfig imuConfig(int samples, double duration) {
-  YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+  YAML::Node root = vehicleImuWithoutHeights();
   root["sampling"]["samples"] = samples;
   root["sampling"]["duration"] = duration;
   root["measurement"]["travel_blend"] = 0.0;  // the raw travel: the formulation alone
@@ -225,25 +226,14 @@ TEST(RoadFreeStream, TravelBlendFollowsAnAgreeingRateAndCutsTheNoise) {
 // a_y's inherited variance with it (the gyro's noise is no longer a signal
 // that a parameter could damp); in a turn it is the reading itself and the
 // variance the gyro's whole noise. Without gyro_z nothing is shrunk.
-// vehicle_imu.yaml with heights, a bar and the vehicle's horizontal motion
+// vehicle_imu.yaml: heights, a bar and the vehicle's horizontal motion
 // (speed, gyro_z) as inputs.
 EstimatorConfig turnsConfig() {
   YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
-  root["vehicle"]["body_cg_height"] = 0.25;
-  root["vehicle"]["added_mass_height"] = 0.4;
-  root["vehicle"]["imu_height"] = 0.1;
-  root["vehicle"]["anti_roll_bar"] = 8000.0;
-  YAML::Node m = root["measurement"];
-  m["channels"].push_back("speed");
-  m["channels"].push_back("gyro_z");
-  for (const char* key : {"sensor_std", "r_relative", "noise_relative"}) {
-    m[key].push_back(std::string(key) == "sensor_std" ? 0.05 : 0.0);
-    m[key].push_back(std::string(key) == "sensor_std" ? 0.002 : 0.0);
-  }
-  root["truth"]["sensor"]["noise_floor"].push_back(0.05);
-  root["truth"]["sensor"]["noise_floor"].push_back(0.002);
-  m["standstill"] = 0.0;
-  return parseConfig(root, "vehicle_imu_turns.yaml");
+  root["measurement"]["standstill"] = 0.0;
+  EXPECT_GT(root["vehicle"]["anti_roll_bar"].as<double>(), 0.0);  // as shipped: heights, a bar
+  EXPECT_GT(root["vehicle"]["imu_height"].as<double>(), 0.0);
+  return parseConfig(root, "vehicle_imu.yaml");
 }
 
 TEST(RoadFreeStream, YawRateShrunkToItsSpread) {

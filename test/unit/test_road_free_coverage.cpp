@@ -16,6 +16,7 @@
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/io/road_free_stream.h"
+#include "vehicle_imu_straight.h"
 
 namespace pc_ekf {
 namespace {
@@ -42,12 +43,12 @@ YAML::Node loadGerms(const YAML::Node& uncertain, const std::vector<double>& val
   return xi;
 }
 
-// config/vehicle_imu.yaml as shipped (with zero: rest as its comment says);
+// config/vehicle_imu.yaml for a vehicle without heights (vehicle_imu_straight.h; with zero: rest as its comment says);
 // the truth drives `road` with `load`,
 // `zero` and, when given, vehicle values that differ from the config's.
 EstimatorConfig rollPlane(const std::string& road, double duration, const std::string& zero,
                           const Load& load, const std::string& vehicle) {
-  YAML::Node root = YAML::LoadFile(std::string(PC_EKF_SOURCE_DIR) + "/config/vehicle_imu.yaml");
+  YAML::Node root = vehicleImuWithoutHeights();
   root["measurement"]["zero"] = zero;
   if (zero == "rest") {  // as the config says for rest: the collocation filter, no load re-open
     root["filter"]["linearization"] = "collocation";
