@@ -13,7 +13,8 @@ namespace pc_ekf {
 StackedObservations forecastRecord(const PcPropagator& propagator,
                                    const Eigen::MatrixXd& theta_coeffs,
                                    const MeasurementSeries& series, const NoiseModel& noise,
-                                   ForecastReport* report) {
+                                   ForecastReport* report, const Eigen::MatrixXd* nuisance_u,
+                                   const Eigen::VectorXd* nuisance_std) {
   const int q = propagator.design().pointCount();
   report->points = q;
   std::vector<std::string> reasons;
@@ -56,14 +57,30 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
   }
   out.z_coeffs = propagator.project(values, usable, report);
   out.variances.resize(rows);
+  const bool nuisance = nuisance_u && nuisance_u->cols() > 0 && nuisance_u->rows() == rows;
+  Eigen::MatrixXd u = nuisance ? *nuisance_u : Eigen::MatrixXd();
   row = 0;
   for (const Measurement& m : series) {
     const Eigen::Index k = m.values.size();
     const NoiseWhitening white(noise, m);
     white.whiten(out.z.segment(row, k));
     white.whiten(out.z_coeffs.middleRows(row, k));
+    if (nuisance) white.whiten(u.middleRows(row, k));
     out.variances.segment(row, k) = white.variances();
     row += k;
+  }
+  if (nuisance) {
+    // In units of each row's std, where the noise is I + U P U^T; W makes it I.
+    const Eigen::VectorXd sd = out.variances.cwiseSqrt();
+    const Eigen::VectorXd inv = sd.cwiseInverse();
+    u = inv.asDiagonal() * u;
+    const NuisanceWhitening w(u, *nuisance_std);
+    out.z = out.z.cwiseProduct(inv);
+    w.apply(Eigen::Ref<Eigen::VectorXd>(out.z));
+    out.z = out.z.cwiseProduct(sd);
+    out.z_coeffs = inv.asDiagonal() * out.z_coeffs;
+    w.apply(Eigen::Ref<Eigen::MatrixXd>(out.z_coeffs));
+    out.z_coeffs = sd.asDiagonal() * out.z_coeffs;
   }
   return out;
 }
@@ -71,14 +88,22 @@ StackedObservations forecastRecord(const PcPropagator& propagator,
 BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, UpdateRule rule,
                         const std::vector<double>& alphas, SupportRule support,
-                        const Eigen::MatrixXd& start) {
+                        const Eigen::MatrixXd& start, const BatchNuisance& nuisance) {
   if (alphas.empty()) throw std::invalid_argument("batchUpdate: no iterations");
   BatchResult result;
   Eigen::MatrixXd theta =
       start.size() > 0 ? start : propagator.priorState().bottomRows(propagator.parameterCount());
   for (std::size_t i = 0; i < alphas.size(); ++i) {
     ForecastReport report;
-    const StackedObservations obs = forecastRecord(propagator, theta, series, noise, &report);
+    Eigen::MatrixXd u;
+    Eigen::VectorXd u_std;
+    if (nuisance.active()) {
+      const Eigen::VectorXd at = pcMean(theta);
+      u = nuisanceSensitivity(propagator.model(), propagator.mapping().fullParameters(at), series,
+                              propagator.integration(), nuisance, &u_std);
+    }
+    const StackedObservations obs =
+        forecastRecord(propagator, theta, series, noise, &report, &u, &u_std);
     result.forecast.merge(report);
     result.observations = static_cast<int>(obs.z.size());
     if (!report.ok) {
@@ -120,7 +145,9 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
   if (restarts.restarts < 0 || !(restarts.width > BatchRestarts::kMinWidth)) {
     throw std::invalid_argument("batchUpdateRestarted: need restarts >= 0 and width > 1");
   }
-  BatchResult result = batchUpdate(propagator, series, noise, rule, alphas, support);
+  BatchResult result =
+      batchUpdate(propagator, series, noise, rule, alphas, support, Eigen::MatrixXd(),
+                  restarts.nuisance);
   const Eigen::MatrixXd prior = propagator.mapping().priorCoefficients(propagator.basis());
   const Eigen::VectorXd prior_std = pcStddev(prior);
   for (int k = 0; k < restarts.restarts && result.finite && result.forecast.ok; ++k) {
@@ -137,7 +164,8 @@ BatchResult batchUpdateRestarted(const PcPropagator& propagator, const Measureme
         working.row(i) = prior.row(i);
       }
     }
-    BatchResult next = batchUpdate(propagator, series, noise, rule, alphas, support, working);
+    BatchResult next =
+        batchUpdate(propagator, series, noise, rule, alphas, support, working, restarts.nuisance);
     if (!next.finite || !next.forecast.ok ||
         !correctForPrior(prior, working, next.coefficients)) {
       break;  // the last good result stands

@@ -8,6 +8,7 @@
 #include <Eigen/Dense>
 #include <vector>
 
+#include "pc_ekf/filter/batch_nuisance.h"
 #include "pc_ekf/filter/kalman_update.h"
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/filter/pc_propagator.h"
@@ -41,20 +42,27 @@ struct StackedObservations {
   Eigen::VectorXd z;
   Eigen::VectorXd variances;
 };
+// With nuisance values (nuisance_u: nuisanceSensitivity's columns, raw units;
+// nuisance_std their prior stds) the rows and data are whitened for them too
+// (NuisanceWhitening), so that R stays the sensors' own.
 StackedObservations forecastRecord(const PcPropagator& propagator,
                                    const Eigen::MatrixXd& theta_coeffs,
                                    const MeasurementSeries& series, const NoiseModel& noise,
-                                   ForecastReport* report);
+                                   ForecastReport* report,
+                                   const Eigen::MatrixXd* nuisance_u = nullptr,
+                                   const Eigen::VectorXd* nuisance_std = nullptr);
 
 // alphas = {1} is the paper's single whole-set update; ES-MDA uses
 // sum(1/alpha_i) = 1 (default four times 4). R_i = alpha_i R.
 // start: the parameter coefficients to begin from (parameters x S); empty:
-// the propagator's prior.
+// the propagator's prior. nuisance: marginalised in every pass, their
+// sensitivity taken at that pass's mean (batch_nuisance.h).
 BatchResult batchUpdate(const PcPropagator& propagator, const MeasurementSeries& series,
                         const NoiseModel& noise, UpdateRule rule,
                         const std::vector<double>& alphas,
                         SupportRule support = SupportRule::kIgnore,
-                        const Eigen::MatrixXd& start = Eigen::MatrixXd());
+                        const Eigen::MatrixXd& start = Eigen::MatrixXd(),
+                        const BatchNuisance& nuisance = BatchNuisance());
 
 // Re-linearised batch update (docs/method.md §4.5): after the update from the
 // prior, `restarts` times again from a working prior around the last result
@@ -73,6 +81,9 @@ struct BatchRestarts {
   // model's local information at its mean (local_covariance.h), its mean the
   // passes'. false (passes): the passes' own.
   bool local_covariance = false;
+  // The road's cross-fall and the IMU's biases, marginalised in every pass
+  // (filter.horizon.cross_fall, accel_bias, gyro_bias; batch_nuisance.h).
+  BatchNuisance nuisance;
 };
 BatchResult batchUpdateRestarted(const PcPropagator& propagator, const MeasurementSeries& series,
                                  const NoiseModel& noise, UpdateRule rule,

@@ -64,6 +64,23 @@ std::vector<Eigen::MatrixXd> simulateChannelsParallel(const MechanicalModel& mod
   return out;
 }
 
+bool simulateChannelsWithOffsets(const MechanicalModel& model, const Eigen::MatrixXd& params,
+                                 const std::vector<double>& times,
+                                 const IntegratorSettings& settings, const Eigen::VectorXd& roll,
+                                 const Eigen::VectorXd& lateral, std::vector<Eigen::MatrixXd>* out) {
+  const auto batch = model.prepare(params);
+  if (!batch->offsetPoints(roll, lateral)) return false;
+  out->assign(times.size(), Eigen::MatrixXd(model.observationMatrix().rows(), params.cols()));
+  Eigen::ArrayXXd y = batch->initialState();
+  double t = 0.0;
+  for (std::size_t k = 0; k < times.size(); ++k) {
+    integrate(model, *batch, t, times[k], y, settings);
+    t = times[k];
+    (*out)[k].noalias() = model.observationMatrix() * y.matrix();
+  }
+  return true;
+}
+
 std::vector<double> sampleTimes(const MeasurementSeries& series) {
   std::vector<double> t;
   t.reserve(series.size());

@@ -27,6 +27,14 @@ std::vector<Eigen::MatrixXd> simulateChannelsParallel(const MechanicalModel& mod
                                                       const IntegratorSettings& settings,
                                                       int threads);
 
+// simulateChannels for a few columns whose later readings take the roll and
+// lateral offsets (ModelBatch::offsetPoints, one per column) into *out. False
+// when the model takes no offsets.
+bool simulateChannelsWithOffsets(const MechanicalModel& model, const Eigen::MatrixXd& params,
+                                 const std::vector<double>& times,
+                                 const IntegratorSettings& settings, const Eigen::VectorXd& roll,
+                                 const Eigen::VectorXd& lateral, std::vector<Eigen::MatrixXd>* out);
+
 std::vector<double> sampleTimes(const MeasurementSeries& series);
 
 }  // namespace pc_ekf

@@ -15,7 +15,7 @@ PredictiveCheck posteriorPredictiveCheck(const MechanicalModel& model,
                                          const Eigen::VectorXd& params,
                                          const MeasurementSeries& series, const NoiseModel& noise,
                                          const IntegratorSettings& integration, int fitted,
-                                         double confidence) {
+                                         double confidence, const BatchNuisance& nuisance) {
   PredictiveCheck p;
   const int channels = static_cast<int>(model.channelNames().size());
   p.channel_mean = Eigen::VectorXd::Zero(channels);
@@ -33,10 +33,33 @@ PredictiveCheck posteriorPredictiveCheck(const MechanicalModel& model,
     return p;
   }
   const auto sim = simulateChannels(model, params, sampleTimes(series), integration);
-  const Eigen::VectorXd r2 = whitenedResiduals(series, noise, sim).col(0).array().square();
+  Eigen::VectorXd r = whitenedResiduals(series, noise, sim).col(0);
+  int absorbed = 0;  // the nuisance values' share of the residual's dof
+  if (nuisance.active()) {
+    Eigen::VectorXd stds;
+    const Eigen::MatrixXd u =
+        nuisanceSensitivity(model, params, series, integration, nuisance, &stds);
+    if (u.cols() > 0) {
+      // Whitened as the residuals (whitenedResiduals: scaled, then decorrelated).
+      Eigen::MatrixXd w = u;
+      Eigen::Index row = 0;
+      for (const Measurement& m : series) {
+        const Eigen::Index k = m.values.size();
+        const NoiseWhitening white(noise, m);
+        w.middleRows(row, k) = white.variances().cwiseSqrt().cwiseInverse().asDiagonal() *
+                               w.middleRows(row, k);
+        white.whiten(w.middleRows(row, k));
+        row += k;
+      }
+      const NuisanceWhitening white(w, stds);
+      white.apply(Eigen::Ref<Eigen::VectorXd>(r));
+      absorbed = static_cast<int>(std::lround(white.absorbed()));
+    }
+  }
+  const Eigen::VectorXd r2 = r.array().square();
   p.available = true;
   p.statistic = r2.sum();
-  p.dof = static_cast<int>(entries) - fitted;
+  p.dof = static_cast<int>(entries) - fitted - absorbed;
   const double tail = (1.0 - confidence) / 2.0;
   p.lower = chiSquareQuantile(tail, p.dof);
   p.upper = chiSquareQuantile(1.0 - tail, p.dof);

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "pc_ekf/filter/batch_nuisance.h"
 #include "pc_ekf/filter/measurement.h"
 #include "pc_ekf/model/integrator.h"
 #include "pc_ekf/model/mechanical_model.h"
@@ -38,10 +39,13 @@ struct PredictiveCheck {
 
 // `params`: the model's full parameter vector at the posterior mean;
 // `fitted`: number of estimated parameters (subtracted from the dof).
+// `nuisance`: the batch methods' marginalised cross-fall and biases
+// (batch_nuisance.h): the residuals are whitened for them too.
 PredictiveCheck posteriorPredictiveCheck(const MechanicalModel& model,
                                          const Eigen::VectorXd& params,
                                          const MeasurementSeries& series, const NoiseModel& noise,
                                          const IntegratorSettings& integration, int fitted,
-                                         double confidence);
+                                         double confidence,
+                                         const BatchNuisance& nuisance = BatchNuisance());
 
 }  // namespace pc_ekf

@@ -191,8 +191,10 @@ void finishRun(const EstimatorConfig& c, std::chrono::steady_clock::time_point s
 BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& propagator,
                               const MeasurementSeries& series, const std::vector<double>& alphas) {
   BatchOutcome o;
+  BatchRestarts restarts = c.es_mda;
+  restarts.nuisance = BatchNuisance::from(c.safeguards.horizon);
   o.result = batchUpdateRestarted(propagator, series, c.measurement.noise, c.update, alphas,
-                                  c.safeguards.support, c.es_mda);
+                                  c.safeguards.support, restarts);
   const BatchResult& b = o.result;
   o.healthy = b.finite && b.forecast.ok;
   if (!b.forecast.first_problem.empty()) o.warnings.push_back(b.forecast.first_problem);
@@ -215,7 +217,7 @@ BatchOutcome runBatchEstimate(const EstimatorConfig& c, const PcPropagator& prop
     const Eigen::VectorXd& at = b.mode.size() > 0 ? b.mode : b.mean;
     o.predictive = posteriorPredictiveCheck(propagator.model(), map.fullParameters(at), series,
                                             c.measurement.noise, c.integration, map.count(),
-                                            c.health.nis_confidence);
+                                            c.health.nis_confidence, restarts.nuisance);
     if (o.predictive.outside) {
       o.healthy = false;
       o.warnings.push_back(o.predictive.warning(propagator.model().channelNames(), series));
