@@ -1,10 +1,11 @@
 #!/usr/bin/python3
-"""Ordinary driving, road-free, roll plane: turns, a lane change, a slalom,
-cross-fall and IMU biases (config/vehicle_imu.yaml, road.source none).
+"""Ordinary driving, road-free: the roll plane on turns, a lane change, a
+slalom, cross-fall and IMU biases (config/vehicle_imu.yaml), the full car on
+braking, accelerating and a lane change (--full-car: config/full_car_imu.yaml).
 
   /usr/bin/python3 scripts/driving_study.py BIN_DIR [--config FILE] [--seeds N]
       [--methods one_step,es_mda] [--drives lane,turn,...] [--model-errors]
-      [--without-driving-inputs]
+      [--without-driving-inputs] [--full-car]
 
 Each run synthesises a 10 s, 200 Hz drive of the truth (truth.road: a course
 whose manoeuvres carry the lateral acceleration, on a road the estimator is
@@ -24,6 +25,8 @@ import argparse, json, os, re, statistics, subprocess, sys, tempfile
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 # (mass, position from the left mount, height above the mount plane)
 LOADS = [(150.0, 0.62, 0.275), (280.0, 0.90, 0.70)]
+LOAD_NAMES = {False: ("added_mass", "added_mass_position", "added_mass_height"),
+              True: ("added_mass", "added_mass_x", "added_mass_y", "added_mass_height")}
 # Nine values off by up to 6 %, the body's centre of mass 2 cm higher, the bar 5 % off.
 OFF = {"unsprung_mass_left": 38.4, "unsprung_mass_right": 34.5, "damping_left": 748.0,
        "damping_right": 680.0, "spring_linear_left": 20325.0, "spring_linear_right": 18600.0,
@@ -52,6 +55,27 @@ DRIVES = {
         54.0, "C", ["{type: iso8608, duration: 1.0}",
                     "{type: turn, duration: 8.0, lateral_acceleration: 3.5, ramp: 1.5, surface: iso8608}",
                     "{type: iso8608, duration: 1.0}"], "  cross_fall: {start: 0.02}\nBIAS"),
+}
+# The full car (config/full_car_imu.yaml): loads (mass, x forward of the rear
+# axle, y left of the right wheels, height above the mount plane); nine values
+# off by up to 5 %, the body's centre of mass 2 cm higher, the bars 5 % off.
+CAR_LOADS = [(150.0, 1.0, 0.62, 0.275), (280.0, 1.6, 0.90, 0.70)]
+CAR_OFF = {"body_mass": 1230.0, "spring_linear_front": 21000.0, "spring_linear_rear": 21000.0,
+           "damping_front": 1575.0, "damping_rear": 1330.0, "roll_inertia": 420.0,
+           "pitch_inertia": 1520.0, "anti_roll_bar_front": 10500.0, "anti_roll_bar_rear": 5700.0,
+           "body_cg_height": 0.22}
+CAR_DRIVES = {
+    "braking 5 m/s^2": (72.0, "B", ["{type: iso8608, duration: 2.0}",
+                                    "{type: brake, duration: 3.0, deceleration: 5.0, surface: iso8608}",
+                                    "{type: iso8608, duration: 5.1, speed_kmh: 18.0}"], ""),
+    "accelerating 2.5 m/s^2": (36.0, "B", ["{type: iso8608, duration: 2.0}",
+                                           "{type: accelerate, duration: 4.0, acceleration: 2.5, surface: iso8608}",
+                                           "{type: iso8608, duration: 4.1, speed_kmh: 72.0}"], ""),
+    "lane change": (72.0, "B", ["{type: iso8608, duration: 2.0}",
+                                "{type: lane_change, duration: 2.5, lateral_acceleration: 4.5, surface: iso8608}",
+                                "{type: lane_change, duration: 2.5, lateral_acceleration: -4.5, surface: iso8608}",
+                                "{type: iso8608, duration: 3.1}"], ""),
+    "straight": (36.0, "B", ["{type: iso8608, duration: 10.1}"], ""),
 }
 # accel_y, accel_z, gyro_x biases (m/s^2, m/s^2, rad/s), the gyro_z's as gyro_x's.
 BIAS = {"accel_y": 0.025, "accel_z": -0.02, "accel_x": 0.02, "gyro_x": 0.0015, "gyro_z": -0.0015}
@@ -87,22 +111,21 @@ def drop_channels(text, names):
     return re.sub(r"((?:channels|sensor_std|r_relative|noise_relative|noise_floor): )\[([^\]]*)\]", cut, text)
 
 
-def config_text(base, drive, seed, vehicle, load):
+def config_text(base, drive, seed, vehicle, load, car=False):
     """The config with a synthetic truth: the drive's course, the load, the vehicle."""
     text = base
-    speed, road_class, course, extra = DRIVES[drive]
+    speed, road_class, course, extra = (CAR_DRIVES if car else DRIVES)[drive]
     text = text.replace("  samples: 2000 ", "  samples: 2000 #", 1)
     start = text.index("\ntruth:")
     end = text.index("\n  sensor:", start)
-    mass, position, height = load
-    xi = [germ(text, "added_mass", mass), germ(text, "added_mass_position", position)]
-    if "- name: added_mass_height" in text:
-        xi.append(germ(text, "added_mass_height", height))
+    names = LOAD_NAMES[car]
+    height = load[-1]
+    xi = [germ(text, n, v) for n, v in zip(names, load)]
     truth = "\ntruth:\n  road:\n    source: course\n    speed_kmh: %.1f\n    %s\n    course:\n" % (
         speed, ISO % (road_class, seed))
     truth += "".join("      - %s\n" % s for s in course)
     truth += "  xi: [%s]\n  seed: %d\n" % (", ".join("%.10f" % v for v in xi), seed)
-    vals = dict(OFF) if vehicle else {}
+    vals = dict(CAR_OFF if car else OFF) if vehicle else {}
     if "- name: added_mass_height" not in text:
         vals["added_mass_height"] = height
     if vals:
@@ -140,17 +163,18 @@ def without_value(text, name):
     return text
 
 
-def truth_cg_height(text, vehicle, load):
-    """DRIVING.md's cg_height of the truth: ((m + M) h_P + S + sum m_u r_w) / (m + M + sum m_u)."""
-    v = {k: vehicle_value(text, k) for k in ("bar_mass", "unsprung_mass_left", "unsprung_mass_right",
-                                             "body_cg_height", "mount_height", "wheel_radius")}
+def truth_cg_height(text, vehicle, load, car=False):
+    """The cg_height of the truth: ((m + M) h_P + S + sum m_u r_w) / (m + M + sum m_u)."""
+    keys = ("body_mass", "unsprung_mass_front", "unsprung_mass_rear") if car else (
+        "bar_mass", "unsprung_mass_left", "unsprung_mass_right")
+    v = {k: vehicle_value(text, k) for k in keys + ("body_cg_height", "mount_height", "wheel_radius")}
     if vehicle:
-        v.update({k: x for k, x in OFF.items() if k in v})
-    mass, _, height = load
-    mu = v["unsprung_mass_left"] + v["unsprung_mass_right"]
-    s = v["bar_mass"] * v["body_cg_height"] + mass * height
-    return ((v["bar_mass"] + mass) * v["mount_height"] + s + mu * v["wheel_radius"]) / (
-        v["bar_mass"] + mass + mu)
+        v.update({k: x for k, x in (CAR_OFF if car else OFF).items() if k in v})
+    mass, height = load[0], load[-1]
+    body = v[keys[0]]
+    mu = (2.0 if car else 1.0) * (v[keys[1]] + v[keys[2]])
+    s = body * v["body_cg_height"] + mass * height
+    return ((body + mass) * v["mount_height"] + s + mu * v["wheel_radius"]) / (body + mass + mu)
 
 
 def estimate(exe, tmp, text, method):
@@ -174,11 +198,18 @@ def main():
     ap.add_argument("--model-errors", action="store_true")
     ap.add_argument("--without-driving-inputs", action="store_true")
     ap.add_argument("--keep", default="", help="a directory to keep each run's config and JSON in")
+    ap.add_argument("--full-car", action="store_true",
+                    help="config/full_car_imu.yaml (unless --config) on braking, accelerating, a "
+                         "double lane change and a straight control")
     a = ap.parse_args()
+    car = a.full_car
+    if car and a.config == ap.get_default("config"):
+        a.config = os.path.join(ROOT, "config", "full_car_imu.yaml")
     base = open(a.config).read()
     if a.without_driving_inputs:
         base = drop_channels(base, ("speed", "gyro_z"))
-    drives = [d for d in DRIVES if not a.drives or any(w in d for w in a.drives.split(","))]
+    drives = [d for d in (CAR_DRIVES if car else DRIVES)
+              if not a.drives or any(w in d for w in a.drives.split(","))]
     exe = os.path.join(a.bin, "estimate_offline")
     if a.model_errors:
         return model_errors(a, exe, base, drives)
@@ -192,18 +223,16 @@ def main():
                 runs = covered = silent = flagged = cg_ok = cg_runs = 0
                 s_cg, s_m, s_h = [], [], []
                 for vehicle in (False, True):
-                    for load in LOADS:
+                    for load in CAR_LOADS if car else LOADS:
                         for seed in range(a.first_seed, a.first_seed + a.seeds):
-                            text = config_text(base, drive, seed, vehicle, load)
+                            text = config_text(base, drive, seed, vehicle, load, car)
                             d, p = estimate(exe, tmp, text, method)
                             if a.keep:
                                 tag = "%s_%s_%d_%d_%d" % (re.sub(r"\W+", "_", drive), method, vehicle,
                                                           int(load[0]), seed)
                                 open(os.path.join(a.keep, tag + ".yaml"), "w").write(text)
                                 json.dump(d, open(os.path.join(a.keep, tag + ".json"), "w"))
-                            names = [("added_mass", load[0]), ("added_mass_position", load[1])]
-                            if "added_mass_height" in p:
-                                names.append(("added_mass_height", load[2]))
+                            names = [(n, v) for n, v in zip(LOAD_NAMES[car], load) if n in p]
                             off = max(abs(p[n]["mean"] - v) / p[n]["stddev"] for n, v in names)
                             runs += 1
                             covered += off <= 3.0 and d["healthy"]
@@ -216,7 +245,7 @@ def main():
                                 s_cg.append(100.0 * p["cg_height"]["stddev"])
                                 if d["healthy"]:
                                     cg_runs += 1
-                                    truth = truth_cg_height(text, vehicle, load)
+                                    truth = truth_cg_height(text, vehicle, load, car)
                                     cg_ok += abs(p["cg_height"]["mean"] - truth) <= 3.0 * p["cg_height"]["stddev"]
                 med = lambda x: "%.2f" % statistics.median(x) if x else "-"
                 print("| %s | %s | %d | %d | %d | %d | %d of %d | %s | %s | %s |" % (
@@ -249,9 +278,7 @@ def model_errors(a, exe, base, drives):
                             text = text.replace("  xi: [", "  vehicle: {%s: %s}\n  xi: [" % (what, value), 1)
                         d, p = estimate(exe, tmp, text, method)
                         flagged += not d["healthy"]
-                        names = [("added_mass", load[0]), ("added_mass_position", load[1])]
-                        if "added_mass_height" in p:
-                            names.append(("added_mass_height", load[2]))
+                        names = [(n, v) for n, v in zip(LOAD_NAMES[False], load) if n in p]
                         miss = any(abs(p[n]["mean"] - v) > 3 * p[n]["stddev"] for n, v in names)
                         silent += d["healthy"] and miss
                     print("| %s | %s | %s | %d/%d | %d |" % (label, drive, method, flagged, len(LOADS), silent),
