@@ -33,15 +33,17 @@ OFF = {"unsprung_mass_left": 38.4, "unsprung_mass_right": 34.5, "damping_left": 
        "bar_inertia": 66.5, "tyre_stiffness_left": 92500.0, "tyre_stiffness_right": 101000.0,
        "body_cg_height": 0.27, "anti_roll_bar": 8400.0}
 ISO = "iso8608: {class: %s, seed: %d, correlation: 0.0}"
+# A steady 3.5 m/s^2 turn between two seconds of straight road.
+TURN = ["{type: iso8608, duration: 1.0}",
+        "{type: turn, duration: 8.0, lateral_acceleration: 3.5, ramp: 1.5, surface: iso8608}",
+        "{type: iso8608, duration: 1.0}"]
 # name: (speed km/h, ISO class, course segments, extra truth text)
 DRIVES = {
     "lane": (72.0, "B", ["{type: iso8608, duration: 2.5}",
                          "{type: lane_change, duration: 2.5, lateral_acceleration: 4.5, surface: iso8608}",
                          "{type: lane_change, duration: 2.5, lateral_acceleration: -4.5, surface: iso8608}",
                          "{type: iso8608, duration: 2.5}"], ""),
-    "turn": (54.0, "C", ["{type: iso8608, duration: 1.0}",
-                         "{type: turn, duration: 8.0, lateral_acceleration: 3.5, ramp: 1.5, surface: iso8608}",
-                         "{type: iso8608, duration: 1.0}"], ""),
+    "turn": (54.0, "C", TURN, ""),
     "slalom": (36.0, "A", ["{type: iso8608, duration: 1.0}",
                            "{type: slalom, duration: 8.0, frequency: 0.5, lateral_acceleration: 3.5, surface: iso8608}",
                            "{type: iso8608, duration: 1.0}"], ""),
@@ -52,9 +54,7 @@ DRIVES = {
                            "  cross_fall: {start: 0.02, end: -0.02, at: 4.0, over: 2.0}\n"),
     "IMU biases": (36.0, "B", ["{type: iso8608, duration: 10.0}"], "BIAS"),
     "turn, cross-fall and biases": (
-        54.0, "C", ["{type: iso8608, duration: 1.0}",
-                    "{type: turn, duration: 8.0, lateral_acceleration: 3.5, ramp: 1.5, surface: iso8608}",
-                    "{type: iso8608, duration: 1.0}"], "  cross_fall: {start: 0.02}\nBIAS"),
+        54.0, "C", TURN, "  cross_fall: {start: 0.02}\nBIAS"),
 }
 # The full car (config/full_car_imu.yaml): loads (mass, x forward of the rear
 # axle, y left of the right wheels, height above the mount plane); nine values
