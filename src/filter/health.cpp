@@ -91,6 +91,7 @@ std::shared_ptr<const HealthMonitor::SupportDraws> supportDraws(const Polynomial
     for (int k : indices[j]) degree += k;
     if (degree == 1) d->first_degree.push_back(static_cast<Eigen::Index>(j));
   }
+  d->first = psi(Eigen::all, d->first_degree);
   if (cache.size() >= 4) cache.erase(cache.begin());
   cache.emplace_back(std::move(key), d);
   return d;
@@ -130,7 +131,17 @@ double HealthMonitor::nisBound(bool upper, int dof) {
   return bound;
 }
 
-double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i) {
+bool HealthMonitor::boundedInside(const Eigen::MatrixXd& coeffs, Eigen::Index i) const {
+  const Eigen::VectorXd& max_abs = draws_->max_abs;
+  const double mean = coeffs(i, 0);
+  double spread = 0.0;
+  for (Eigen::Index j = 1; j < coeffs.cols(); ++j) spread += std::abs(coeffs(i, j)) * max_abs[j];
+  const double slack = 4.0 * static_cast<double>(coeffs.cols()) *
+                       std::numeric_limits<double>::epsilon() * (std::abs(mean) + spread);
+  return mean - spread - slack >= lower_[i] && mean + spread + slack <= upper_[i];
+}
+
+double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i, const double* near) {
   const Eigen::Index draws = draws_->draws;
   const Eigen::VectorXd& max_abs = draws_->max_abs;
   if (draws == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
@@ -149,18 +160,20 @@ double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i)
   // parameter's spread, n products per draw instead of S) is within `rest`
   // (the higher terms' bounds) + slack of the value, so only the draws where
   // that reaches a bound need the value itself, summed as psi * c sums it
-  // (gemvValue): the count is the full product's.
+  // (gemvValue): the count is the full product's. Summed in any order, the
+  // first-degree part is within f eps spread <= slack of itself.
   double rest = spread;
-  near_.setConstant(mean);
-  for (Eigen::Index j : draws_->first_degree) {
-    near_ += coeffs(i, j) * draws_->padded.col(j).head(draws);
-    rest -= std::abs(coeffs(i, j)) * max_abs[j];
+  for (Eigen::Index j : draws_->first_degree) rest -= std::abs(coeffs(i, j)) * max_abs[j];
+  if (!near) {
+    near_.setConstant(mean);
+    for (Eigen::Index j : draws_->first_degree) near_ += coeffs(i, j) * draws_->padded.col(j).head(draws);
+    near = near_.data();
   }
   // `rest` by subtraction carries round-off of the order of spread eps: twice the slack covers it.
   const double margin = std::max(rest, 0.0) + 2.0 * slack;
   candidates_.clear();
   for (Eigen::Index d = 0; d < draws; ++d) {
-    if (!(near_[d] - margin >= lower && near_[d] + margin <= upper)) candidates_.push_back(d);
+    if (!(near[d] - margin >= lower && near[d] + margin <= upper)) candidates_.push_back(d);
   }
   // Many candidates (a parameter spread over many germs): left to fullProducts.
   if (static_cast<Eigen::Index>(candidates_.size()) * 8 > draws) return -1.0;
@@ -210,7 +223,21 @@ void HealthMonitor::assessSupport(const Eigen::MatrixXd& coeffs, HealthStatus* h
   h->mass_outside_support = Eigen::VectorXd::Zero(coeffs.rows());
   h->support_exceeded = false;
   if (h->non_finite) return;
-  for (Eigen::Index i = 0; i < coeffs.rows(); ++i) h->mass_outside_support[i] = massOutside(coeffs, i);
+  // The first-degree part of every parameter not bounded inside, as one product.
+  std::vector<Eigen::Index> open;
+  for (Eigen::Index i = 0; i < coeffs.rows(); ++i) {
+    if (!boundedInside(coeffs, i)) open.push_back(i);
+  }
+  if (open.size() >= 2 && draws_->draws > 0 && !draws_->first_degree.empty()) {
+    near_all_.noalias() = draws_->first * coeffs(open, draws_->first_degree).transpose();
+    for (std::size_t k = 0; k < open.size(); ++k) {
+      near_all_.col(static_cast<Eigen::Index>(k)).array() += coeffs(open[k], 0);
+      h->mass_outside_support[open[k]] =
+          massOutside(coeffs, open[k], near_all_.col(static_cast<Eigen::Index>(k)).data());
+    }
+  } else {
+    for (Eigen::Index i : open) h->mass_outside_support[i] = massOutside(coeffs, i);
+  }
   fullProducts(coeffs, h->mass_outside_support);
   h->support_exceeded = (h->mass_outside_support.array() > settings_.support_mass_limit).any();
 }

@@ -87,6 +87,7 @@ class HealthMonitor {
     Eigen::MatrixXd psi_t;           // S x draws: one draw's values contiguous
     Eigen::VectorXd max_abs;         // per term, max over the draws of |psi_j|
     std::vector<Eigen::Index> first_degree;  // the terms of total degree 1
+    Eigen::MatrixXd first;                   // draws x |first_degree|: their columns, together
   };
 
   HealthMonitor(const PcPropagator& propagator, const HealthSettings& settings);
@@ -102,12 +103,16 @@ class HealthMonitor {
   double nisBound(bool upper, int dof);
   // Fraction of the germ draws whose value lies outside [lower_i, upper_i];
   // -1 when most draws need the whole product (fullProducts fills those in).
-  double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i);
+  // near: the mean plus first-degree terms at the draws (else computed here).
+  double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i, const double* near = nullptr);
+  // Whether every draw's value is inside the support by the terms' bounds alone.
+  bool boundedInside(const Eigen::MatrixXd& coeffs, Eigen::Index i) const;
   void fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass);
 
   HealthSettings settings_;
   std::shared_ptr<const SupportDraws> draws_;  // shared by monitors of the same basis
   Eigen::VectorXd near_;                       // support_draws: mean + first-degree terms (reused)
+  Eigen::MatrixXd near_all_;                   // draws x parameters: the same, several at once
   Eigen::RowVectorXd row_;                     // one quantity's coefficients, contiguous (reused)
   std::vector<Eigen::Index> candidates_;       // draws the bounds do not show inside (reused)
   Eigen::VectorXd lower_, upper_;

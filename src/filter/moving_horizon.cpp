@@ -356,7 +356,7 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
 namespace {
 
 // Kalman update of (mean, cov) by one whitened sample linearised at `at`:
-// prediction z0 + J (mean - at). Joseph form keeps cov symmetric and PSD.
+// prediction z0 + J (mean - at).
 void linearUpdate(const Eigen::VectorXd& values, const Eigen::VectorXd& z0,
                   const Eigen::MatrixXd& j, const Eigen::VectorXd& r, const Eigen::VectorXd& at,
                   Eigen::VectorXd& mean, Eigen::MatrixXd& cov, UpdateDiagnostics* d) {
@@ -370,14 +370,18 @@ void linearUpdate(const Eigen::VectorXd& values, const Eigen::VectorXd& z0,
     d->singular = true;
     return;
   }
-  const Eigen::MatrixXd k = llt.solve(pj.transpose()).transpose();
+  // With the gain optimal, the Joseph form equals P - K S K^T = P - W W^T,
+  // W = P J^T L^-T (S = L L^T): c columns instead of three N x N products,
+  // symmetric by construction.
+  Eigen::MatrixXd w = pj;
+  llt.matrixU().solveInPlace<Eigen::OnTheRight>(w);  // W L^T = P J^T
   d->innovation = innovation;
-  d->nis = innovation.dot(llt.solve(innovation));
+  const Eigen::VectorXd white = llt.matrixL().solve(innovation);
+  d->nis = white.squaredNorm();
   d->channels = static_cast<int>(values.size());
-  Eigen::MatrixXd ikh = Eigen::MatrixXd::Identity(mean.size(), mean.size()) - k * j;
-  mean += k * innovation;
-  cov = ikh * cov * ikh.transpose() + k * r.asDiagonal() * k.transpose();
-  cov = 0.5 * (cov + cov.transpose());
+  mean.noalias() += w * white;
+  cov.selfadjointView<Eigen::Lower>().rankUpdate(w, -1.0);
+  cov.triangularView<Eigen::StrictlyUpper>() = cov.transpose();
   d->finite = mean.allFinite() && cov.allFinite() && std::isfinite(d->nis);
 }
 

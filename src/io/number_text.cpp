@@ -125,6 +125,10 @@ std::string roundTripText(double v) {
 }
 
 void appendG17(std::string& out, double v) {
+  if (v == 0.0) {  // most of an affine expansion's coefficients: to_chars' slow path
+    out.append(std::signbit(v) ? "-0" : "0");
+    return;
+  }
   char text[40];
   char* end = nullptr;
   if (!exactG17(v, text, &end)) {

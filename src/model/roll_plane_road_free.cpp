@@ -271,6 +271,10 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
   if (tare) {
     Eigen::MatrixXd empty = params;
     empty.row(at.added_mass).setZero();
+    // Without the load its place and height do not matter (0 M exactly): held
+    // at the first column's, the steps in them share its solution.
+    empty.row(at.added_mass_position).setConstant(params(at.added_mass_position, 0));
+    empty.row(at.added_mass_height).setConstant(params(at.added_mass_height, 0));
     unloaded = solveStaticEquilibria(empty);
   }
   for (Eigen::Index q = 0; q < params.cols(); ++q) {

@@ -242,9 +242,10 @@ void solveWithHeights(const double* p, StaticEquilibrium& e) {
     Eigen::Matrix3d j;
     j << slope[0] + bar, -bar, shift, -bar, slope[1] + bar, -shift, 1.0, -1.0,
         length - shift * (1.0 / p[at.tyre_stiffness[0]] + 1.0 / p[at.tyre_stiffness[1]]);
-    const auto lu = j.partialPivLu();
-    determinant = lu.determinant();
-    const Eigen::Vector3d step = lu.solve(r);
+    // Closed-form 3 x 3 inverse (cofactors): a pivoted LU costs several times more,
+    // and Newton's residual, not the step's round-off, decides convergence.
+    determinant = j.determinant();
+    const Eigen::Vector3d step = j.inverse() * r;
     x -= step;
     if (!x.allFinite()) break;
     // Quadratic convergence: a step of 1e-14 (m; rad) leaves round-off.
@@ -267,6 +268,23 @@ void solveWithHeights(const double* p, StaticEquilibrium& e) {
 std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& params) {
   const RollPlaneFields<int>& at = rollPlaneRows();
   const std::size_t n = static_cast<std::size_t>(params.cols());
+  // A filter's columns are a point and steps from it, often the point itself
+  // again: a column equal to the first takes its solution.
+  if (n > 1) {
+    std::vector<Eigen::Index> distinct{0};
+    std::vector<bool> same(n, false);
+    for (Eigen::Index q = 1; q < params.cols(); ++q) {
+      same[static_cast<std::size_t>(q)] = params.col(q) == params.col(0);
+      if (!same[static_cast<std::size_t>(q)]) distinct.push_back(q);
+    }
+    if (distinct.size() < n) {
+      const std::vector<StaticEquilibrium> solved = solveStaticEquilibria(params(Eigen::all, distinct));
+      std::vector<StaticEquilibrium> es(n);
+      std::size_t k = 0;
+      for (std::size_t q = 0; q < n; ++q) es[q] = same[q] ? solved.front() : solved[k++];
+      return es;
+    }
+  }
   std::vector<StaticEquilibrium> es(n);
   std::vector<double> k(2 * n), k3(2 * n), w(2 * n), d(2 * n);
   for (std::size_t j = 0; j < n; ++j) {

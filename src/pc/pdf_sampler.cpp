@@ -167,27 +167,36 @@ std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& co
   const std::size_t needed = static_cast<std::size_t>(draws_ + kPad) * quantities;
   if (values_buffer.size() < needed) values_buffer = LargeArray(needed);
   Eigen::Map<Eigen::MatrixXd> values(values_buffer.data(), draws_ + kPad, quantities);
+  // The terms some quantity uses. A term whose coefficients are all 0 adds
+  // exactly 0 to each running sum: within one block (terms <= block_cols)
+  // leaving it out changes no bit and spares its products (an expansion
+  // linear in the germs uses 1 + n of its S terms).
+  std::vector<int> used;
+  for (int j = 0; j < terms_; ++j) {
+    if (terms_ > block_cols || (coefficients.col(j).array() != 0.0).any()) used.push_back(j);
+  }
+  const int active = static_cast<int>(used.size());
   // Coefficients row by row, contiguous.
-  std::vector<double> rows(static_cast<std::size_t>(quantities) * terms_);
+  std::vector<double> rows(static_cast<std::size_t>(quantities) * active);
   for (Eigen::Index r = 0; r < quantities; ++r) {
-    for (int j = 0; j < terms_; ++j) rows[r * terms_ + j] = coefficients(r, j);
+    for (int k = 0; k < active; ++k) rows[r * active + k] = coefficients(r, used[k]);
   }
   // Blocks of draws split among the threads: each value is its draw's sum
   // alone, so the split does not change a bit.
   const int blocks = (draws_ + kBlock - 1) / kBlock;
   inParts(blocks, threads, [&](int block_begin, int block_end) {
-    std::vector<double> products(static_cast<std::size_t>(terms_) * (kBlock + kPad), 1.0);
-    std::vector<const double*> psi(static_cast<std::size_t>(terms_));
+    std::vector<double> products(static_cast<std::size_t>(active) * (kBlock + kPad), 1.0);
+    std::vector<const double*> psi(static_cast<std::size_t>(active));
     for (int q0 = block_begin * kBlock; q0 < std::min(draws_, block_end * kBlock); q0 += kBlock) {
       const int count = std::min(kBlock, draws_ - q0);
-      for (int j = 0; j < terms_; ++j) {
-        const std::vector<int>& f = factors_[static_cast<std::size_t>(j)];
-        double* row = products.data() + static_cast<std::size_t>(j) * (kBlock + kPad);
+      for (int k = 0; k < active; ++k) {
+        const std::vector<int>& f = factors_[static_cast<std::size_t>(used[k])];
+        double* row = products.data() + static_cast<std::size_t>(k) * (kBlock + kPad);
         if (f.size() == 1) {  // one factor: its values as they are
-          psi[j] = univariate_.data() + static_cast<std::size_t>(f[0]) * (draws_ + kPad) + q0;
+          psi[k] = univariate_.data() + static_cast<std::size_t>(f[0]) * (draws_ + kPad) + q0;
           continue;
         }
-        psi[j] = row;
+        psi[k] = row;
         if (f.empty()) continue;  // the constant term: stays 1
         const double* first =
             univariate_.data() + static_cast<std::size_t>(f[0]) * (draws_ + kPad) + q0;
@@ -200,7 +209,7 @@ std::vector<Histogram> ParameterPdfSampler::histograms(const Eigen::MatrixXd& co
         }
       }
       for (Eigen::Index r = 0; r < quantities; ++r) {
-        gemvOrderValues(psi.data(), rows.data() + r * terms_, terms_, block_cols, count,
+        gemvOrderValues(psi.data(), rows.data() + r * active, active, block_cols, count,
                         values.col(r).data() + q0);
       }
     }
