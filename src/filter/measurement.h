@@ -29,6 +29,10 @@ struct Measurement {
   // one before by input_correlation[i].
   Eigen::MatrixXd input_slopes{};
   Eigen::VectorXd input_correlation{};
+  // The sample's share of the whitened residuals' sum of squares' variance
+  // beyond 2 per entry, from noise it shares with the samples before it
+  // (road-free inputs: filter/serial_noise.h); 0 when none or not reckoned.
+  double serial_variance = 0.0;
   // A recognised stop's sample (road-free, measurement.standstill): the
   // vehicle values' walk over the interval it ends is filter.drift alone.
   bool standing = false;

@@ -61,8 +61,21 @@ PredictiveCheck posteriorPredictiveCheck(const MechanicalModel& model,
   p.statistic = r2.sum();
   p.dof = static_cast<int>(entries) - fitted - absorbed;
   const double tail = (1.0 - confidence) / 2.0;
-  p.lower = chiSquareQuantile(tail, p.dof);
-  p.upper = chiSquareQuantile(1.0 - tail, p.dof);
+  // Noise that neighbouring samples share (Measurement::serial_variance)
+  // leaves T's mean but widens its spread: T taken as s chi2(nu) with the
+  // same mean and that variance, s = V / (2 dof), nu = dof / s.
+  double serial = 0.0;
+  for (const auto& m : series) serial += m.serial_variance;
+  p.spread = 1.0;
+  if (serial > 0.0 && p.dof > 0) {
+    p.spread = 1.0 + serial / (2.0 * p.dof);
+    const double nu = p.dof / p.spread;
+    p.lower = p.spread * chiSquareQuantile(tail, nu);
+    p.upper = p.spread * chiSquareQuantile(1.0 - tail, nu);
+  } else {
+    p.lower = chiSquareQuantile(tail, p.dof);
+    p.upper = chiSquareQuantile(1.0 - tail, p.dof);
+  }
   p.outside = !(p.statistic >= p.lower && p.statistic <= p.upper);  // NaN is outside
 
   // Per channel and per sample, for the warning.

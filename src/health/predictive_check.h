@@ -4,7 +4,8 @@
 // normalised residual sum of squares
 //   T = sum_k sum_c (z_kc - h_c(t_k; theta_mean))^2 / R_kc
 // is chi-square distributed with (observed entries - parameters) degrees of
-// freedom (the parameters were fitted to the same data); T outside the
+// freedom (the parameters were fitted to the same data), its spread widened
+// by noise that neighbouring samples share (road-free inputs); T outside the
 // two-sided bounds flags model error (or an R that does not describe the
 // sensor), naming the channels and the time window that contribute most.
 #pragma once
@@ -25,6 +26,9 @@ struct PredictiveCheck {
   double statistic = 0.0;  // T
   int dof = 0;
   double lower = 0.0, upper = 0.0;
+  // T's variance over the chi-square's 2 dof (1: independent samples); the
+  // bounds are those of spread * chi2(dof / spread), the same mean.
+  double spread = 1.0;
   bool outside = false;        // drives health
   Eigen::VectorXd channel_mean;  // per model channel: mean of the normalised squared residuals
   std::vector<std::string> channel_names;  // the model channels with entries, by name

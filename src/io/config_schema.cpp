@@ -178,7 +178,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"health.coherence_decimation", "integer", "10", "[2, 1000000]", "the coherence filter sees every k-th sample"},
       {"health.coherence_threshold", "number", "3", "(0, inf)", "flag above this many combined std"},
       {"health.innovation_gate", "number", "0", "[0, 0.5]", "one-step: a sample whose NIS exceeds the chi-square quantile 1 - innovation_gate is not used (counted, reported); 0 = off"},
-      {"health.predictive_check", "bool", "true", "true or false", "batch methods: simulate at the posterior mean; a normalised residual sum of squares outside its chi-square bounds (nis_confidence, dof = observed entries - parameters) -> not healthy"},
+      {"health.predictive_check", "bool", "true", "true or false", "batch methods: simulate at the posterior mean; a normalised residual sum of squares outside its chi-square bounds (nis_confidence, dof = observed entries - parameters; road-free, widened by the noise neighbouring samples share, method.md §5.4) -> not healthy"},
       {"health.rate_window", "number", "10", "(0, inf)", "one-step: s; the safeguards' rates (gated, damped, re-opened, support-exceeded samples) are judged over the last rate_window s and over the run ([method.md §5.9](method.md))"},
       {"health.reopen_interval", "number", "60", "(0, inf)", "one-step: expected s between load changes; re-opens are judged against a Poisson rate of 1 / reopen_interval per s"},
       // parameter PDFs

@@ -107,6 +107,7 @@ std::string toJson(const OfflineResult& r) {
                            {"dof", r.predictive.dof},
                            {"lower", r.predictive.lower},
                            {"upper", r.predictive.upper},
+                           {"spread", r.predictive.spread},
                            {"outside", r.predictive.outside}};
   // Each observed channel's mean normalised squared residual (1 under the model).
   Json per_channel = Json::object();

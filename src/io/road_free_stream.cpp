@@ -122,6 +122,7 @@ RoadFreeStream::RoadFreeStream(const EstimatorConfig& c, std::vector<std::string
   }
   // Each input's noise by the config's rule: an absolute and a relative part.
   const NoiseModel& noise = c.measurement.noise;
+  noise_ = noise;
   absolute_.resize(static_cast<Eigen::Index>(inputs.size()));
   relative_.resize(absolute_.size());
   for (std::size_t i = 0; i < inputs.size(); ++i) {
@@ -279,7 +280,14 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
   const auto k = static_cast<std::size_t>(samples_ - 1);
-  if (!state_inputs_.empty()) {
+  if (serial_) {
+    if (!state_inputs_.empty()) inputSlopes(k, still, &o);  // (sets this sample's rhos)
+    Eigen::MatrixXd covariance, slopes;
+    inheritedWithSlopes(k, still, &covariance, &slopes);
+    if (yaw_ >= 0) shrinkYawNoise(&covariance, &slopes);
+    if (state_inputs_.empty()) o.extra_covariance = covariance(o.channels, o.channels);
+    reckonSerialNoise(slopes, &o);
+  } else if (!state_inputs_.empty()) {
     inputSlopes(k, still, &o);
   } else if (yaw_ >= 0) {
     Eigen::MatrixXd covariance, slopes;
@@ -342,6 +350,32 @@ void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& stil
   o->extra_covariance = covariance(o->channels, o->channels);
   o->input_slopes = carried(o->channels, Eigen::all);
   o->input_correlation = rho;
+}
+
+void RoadFreeStream::reckonSerialNoise(const Eigen::MatrixXd& slopes, Measurement* o) {
+  const Eigen::Index n = static_cast<Eigen::Index>(input_channels_.size());
+  const Eigen::Index c = static_cast<Eigen::Index>(o->channels.size());
+  if (c == 0 || slopes.cols() != 2 * n) return;
+  // r = A eps_k - B eps_{k-1}: A the output's own noise where it is an input
+  // (a gyro) less the slopes now, B the slopes before; whitened as the
+  // residuals are (whitenedResiduals: scaled, then decorrelated).
+  Eigen::MatrixXd a = -slopes(o->channels, Eigen::seqN(0, n));
+  Eigen::MatrixXd b = slopes(o->channels, Eigen::seqN(n, n));
+  Eigen::VectorXd rho(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    rho[i] = inputs_->noiseCorrelation(static_cast<int>(i));
+    for (Eigen::Index r = 0; r < c; ++r) {
+      if (o->channels[static_cast<std::size_t>(r)] != input_channels_[static_cast<std::size_t>(i)]) continue;
+      a(r, i) += std::hypot(raw_absolute_[i], raw_relative_[i] * o->values[r]);
+    }
+  }
+  const NoiseWhitening white(noise_, *o);
+  const Eigen::VectorXd scale = white.variances().cwiseSqrt().cwiseInverse();
+  a = scale.asDiagonal() * a;
+  b = scale.asDiagonal() * b;
+  white.whiten(a);
+  white.whiten(b);
+  o->serial_variance = serial_->add(a, b, rho);
 }
 
 void RoadFreeStream::shrinkYawNoise(Eigen::MatrixXd* covariance, Eigen::MatrixXd* slopes) const {
@@ -421,6 +455,7 @@ std::string roadFreeRefusal(const EstimatorConfig& c, std::size_t k, const Measu
 RoadFreeRecord roadFreeRecord(const EstimatorConfig& c, const MeasurementSeries& record,
                               double interval) {
   RoadFreeStream stream(c, RoadFreeStream::inputsFor(c, &record), interval);
+  if (c.health.predictive_check) stream.trackSerialNoise();  // the batch methods' check
   RoadFreeRecord r;
   r.outputs.reserve(record.size());
   std::string first_problem;

@@ -11,10 +11,12 @@
 #include <functional>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "pc_ekf/filter/measurement.h"
+#include "pc_ekf/filter/serial_noise.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/io/standstill.h"
 #include "pc_ekf/model/mechanical_model.h"
@@ -67,6 +69,9 @@ class RoadFreeStream {
   // (Measurement::extra_covariance). Returns "" or why the sample was refused (an input not
   // read yet, a time not after the last); then nothing changes.
   std::string add(const Measurement& m, Measurement* out);
+  // From now on add() also reckons each sample's Measurement::serial_variance
+  // (for a batch method's posterior-predictive check; a little cost per sample).
+  void trackSerialNoise() { serial_.emplace(); }
   // True while no sample has been taken and `m` lacks one of the inputs
   // (absent or NaN): add() refuses it, "not read yet", as there is nothing
   // to hold that input at. Such samples are dropped (estimator_node rejects
@@ -117,6 +122,10 @@ class RoadFreeStream {
   // inherited covariance and input slopes, at the shrunk reading's error
   // (sqrt(s) of the raw std, at this sample and at the one before).
   void shrinkYawNoise(Eigen::MatrixXd* covariance, Eigen::MatrixXd* slopes) const;
+  // o's serial_variance from its inputs' slopes (all inputs, model channel rows).
+  void reckonSerialNoise(const Eigen::MatrixXd& slopes, Measurement* o);
+  std::optional<SerialNoise> serial_;
+  NoiseModel noise_;
 
   std::string source_;
   std::shared_ptr<ReadingInputs> inputs_;

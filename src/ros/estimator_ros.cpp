@@ -190,6 +190,8 @@ void EstimatorRos::logStartSensitivity() {
 
 void EstimatorRos::startRoadFree() {
   road_free_ = std::make_unique<RoadFreeStream>(config_, RoadFreeStream::inputsFor(config_));
+  // ~estimate_batch's posterior-predictive check reads the samples' shared noise.
+  if (config_.health.predictive_check) road_free_->trackSerialNoise();
   analytic_propagator_ = makePropagator(config_, road_free_->model());
 }
 
