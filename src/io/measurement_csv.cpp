@@ -1,6 +1,7 @@
 #include "pc_ekf/io/measurement_csv.h"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <functional>
@@ -41,11 +42,14 @@ double parseCell(const std::string& raw, bool missing_ok, const std::string& sou
     if (missing_ok) return std::numeric_limits<double>::quiet_NaN();
     fail(source, line, "column '" + column + "' is empty, expected a number");
   }
-  std::istringstream in(s);
-  in.imbue(std::locale::classic());
+  // from_chars: the C locale's number, without a stream per cell (a long
+  // record has millions); a leading '+' as a stream reads it.
+  const char* first = s.data();
+  const char* last = s.data() + s.size();
+  if (s.size() > 1 && s[0] == '+' && s[1] != '-' && s[1] != '+') ++first;
   double v = 0.0;
-  in >> v;
-  if (in.fail() || !in.eof() || !std::isfinite(v)) {
+  const auto [end, error] = std::from_chars(first, last, v);
+  if (error != std::errc() || end != last || !std::isfinite(v)) {
     fail(source, line, "column '" + column + "': '" + s + "' is not a finite number");
   }
   return v;

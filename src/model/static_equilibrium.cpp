@@ -212,7 +212,7 @@ void bracketTilt(const double* p, StaticEquilibrium& e, double t0, double moment
 // The point must be stable (the Jacobian's determinant > 0: a small tilt is
 // restored); when Newton fails or ends elsewhere, bracketTilt() solves it or
 // says that there is no stable point.
-void solveWithHeights(const double* p, StaticEquilibrium& e) {
+void solveWithHeights(const double* p, StaticEquilibrium& e, const Eigen::Vector3d* start = nullptr) {
   const RollPlaneFields<int>& at = rollPlaneRows();
   const double g = p[at.gravity], length = p[at.bar_length], bar = p[at.anti_roll_bar];
   const double moment = elevatedMoment(p, at);
@@ -224,7 +224,10 @@ void solveWithHeights(const double* p, StaticEquilibrium& e) {
     w[1] = weight * e.combined_cg / length + shift * t;
   };
   const double t0 = (e.height[0] - e.height[1]) / length;
-  Eigen::Vector3d x(e.spring_compression[0], e.spring_compression[1], t0);
+  // From a neighbouring point's solution when given (a filter's steps from
+  // one point: two Newton steps instead of five), else from the solution
+  // without heights and bar.
+  Eigen::Vector3d x = start ? *start : Eigen::Vector3d(e.spring_compression[0], e.spring_compression[1], t0);
   bool converged = false;
   double determinant = 0.0;
   for (int it = 0; it < 100 && !converged; ++it) {
@@ -307,6 +310,8 @@ std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& para
     }
   }
   springCompressions(k.data(), k3.data(), w.data(), d.data(), 2 * n);
+  Eigen::Vector3d start;
+  bool have_start = false;
   for (std::size_t j = 0; j < n; ++j) {
     const double* p = &params(0, static_cast<Eigen::Index>(j));
     StaticEquilibrium& e = es[j];
@@ -318,11 +323,17 @@ std::vector<StaticEquilibrium> solveStaticEquilibria(const Eigen::MatrixXd& para
     }
     const bool elevated = p[at.body_cg_height] != 0.0 || p[at.added_mass_height] != 0.0;
     if (elevated || p[at.anti_roll_bar] != 0.0) {
-      solveWithHeights(p, e);
+      // The first elevated column's solution starts the others' Newton.
+      solveWithHeights(p, e, have_start ? &start : nullptr);
       for (int i = 0; i < 2; ++i) {
         e.height[i] =
             -(e.spring_compression[i] +
               (e.load[i] + p[at.unsprung_mass[i]] * p[at.gravity]) / p[at.tyre_stiffness[i]]);
+      }
+      if (!have_start) {
+        start = Eigen::Vector3d(e.spring_compression[0], e.spring_compression[1],
+                                (e.height[0] - e.height[1]) / p[at.bar_length]);
+        have_start = true;
       }
     }
     e.roll_angle = std::atan((e.height[1] - e.height[0]) / p[at.bar_length]);
