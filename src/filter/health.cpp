@@ -131,13 +131,21 @@ double HealthMonitor::nisBound(bool upper, int dof) {
   return bound;
 }
 
-bool HealthMonitor::boundedInside(const Eigen::MatrixXd& coeffs, Eigen::Index i) const {
+double HealthMonitor::spreadBound(const Eigen::MatrixXd& coeffs, Eigen::Index i,
+                                  double* slack) const {
+  // Every draw's value lies in mean +- spread (|psi_j| <= max_abs_j), up to the
+  // dot product's round-off (bounded by S eps (|mean| + spread); 4x margin).
   const Eigen::VectorXd& max_abs = draws_->max_abs;
-  const double mean = coeffs(i, 0);
   double spread = 0.0;
   for (Eigen::Index j = 1; j < coeffs.cols(); ++j) spread += std::abs(coeffs(i, j)) * max_abs[j];
-  const double slack = 4.0 * static_cast<double>(coeffs.cols()) *
-                       std::numeric_limits<double>::epsilon() * (std::abs(mean) + spread);
+  *slack = 4.0 * static_cast<double>(coeffs.cols()) * std::numeric_limits<double>::epsilon() *
+           (std::abs(coeffs(i, 0)) + spread);
+  return spread;
+}
+
+bool HealthMonitor::boundedInside(const Eigen::MatrixXd& coeffs, Eigen::Index i) const {
+  double slack = 0.0;
+  const double spread = spreadBound(coeffs, i, &slack), mean = coeffs(i, 0);
   return mean - spread - slack >= lower_[i] && mean + spread + slack <= upper_[i];
 }
 
@@ -146,15 +154,11 @@ double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i,
   const Eigen::VectorXd& max_abs = draws_->max_abs;
   if (draws == 0) return std::numeric_limits<double>::quiet_NaN();  // mean of no draws
   const double lower = lower_[i], upper = upper_[i], mean = coeffs(i, 0);
-  // Every draw's value lies in mean +- spread (|psi_j| <= max_abs_j), up to the
-  // dot product's round-off (bounded by S eps (|mean| + spread); 4x margin). When
-  // that interval is inside the support, no draw is outside, which is the common
-  // case once the data have narrowed the PDF.
   const Eigen::Index terms = coeffs.cols();
-  double spread = 0.0;
-  for (Eigen::Index j = 1; j < terms; ++j) spread += std::abs(coeffs(i, j)) * max_abs[j];
-  const double slack = 4.0 * static_cast<double>(terms) * std::numeric_limits<double>::epsilon() *
-                       (std::abs(mean) + spread);
+  // When the bounds are inside the support, no draw is outside: the common
+  // case once the data have narrowed the PDF.
+  double slack = 0.0;
+  const double spread = spreadBound(coeffs, i, &slack);
   if (mean - spread - slack >= lower && mean + spread + slack <= upper) return 0.0;
   // Otherwise per draw: the mean plus the first-degree terms (the bulk of a
   // parameter's spread, n products per draw instead of S) is within `rest`

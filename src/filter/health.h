@@ -105,7 +105,9 @@ class HealthMonitor {
   // -1 when most draws need the whole product (fullProducts fills those in).
   // near: the mean plus first-degree terms at the draws (else computed here).
   double massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i, const double* near = nullptr);
-  // Whether every draw's value is inside the support by the terms' bounds alone.
+  // The bound on |value - mean| over the draws (and its round-off, *slack),
+  // and whether every draw's value is inside the support by it alone.
+  double spreadBound(const Eigen::MatrixXd& coeffs, Eigen::Index i, double* slack) const;
   bool boundedInside(const Eigen::MatrixXd& coeffs, Eigen::Index i) const;
   void fullProducts(const Eigen::MatrixXd& coeffs, Eigen::VectorXd& mass);
 

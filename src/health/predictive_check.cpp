@@ -66,16 +66,10 @@ PredictiveCheck posteriorPredictiveCheck(const MechanicalModel& model,
   // same mean and that variance, s = V / (2 dof), nu = dof / s.
   double serial = 0.0;
   for (const auto& m : series) serial += m.serial_variance;
-  p.spread = 1.0;
-  if (serial > 0.0 && p.dof > 0) {
-    p.spread = 1.0 + serial / (2.0 * p.dof);
-    const double nu = p.dof / p.spread;
-    p.lower = p.spread * chiSquareQuantile(tail, nu);
-    p.upper = p.spread * chiSquareQuantile(1.0 - tail, nu);
-  } else {
-    p.lower = chiSquareQuantile(tail, p.dof);
-    p.upper = chiSquareQuantile(1.0 - tail, p.dof);
-  }
+  // (serial 0: spread 1 exactly, the chi-square's own bounds.)
+  if (p.dof > 0) p.spread = 1.0 + serial / (2.0 * p.dof);
+  p.lower = p.spread * chiSquareQuantile(tail, p.dof / p.spread);
+  p.upper = p.spread * chiSquareQuantile(1.0 - tail, p.dof / p.spread);
   p.outside = !(p.statistic >= p.lower && p.statistic <= p.upper);  // NaN is outside
 
   // Per channel and per sample, for the warning.

@@ -280,20 +280,16 @@ std::string RoadFreeStream::add(const Measurement& m, Measurement* out) {
   // renewed from the samples so far at 1, 2, 4, ... samples.
   if ((samples_ & (samples_ - 1)) == 0) updateInputNoise();
   const auto k = static_cast<std::size_t>(samples_ - 1);
-  if (serial_) {
-    if (!state_inputs_.empty()) inputSlopes(k, still, &o);  // (sets this sample's rhos)
+  if (!state_inputs_.empty()) {
+    Eigen::MatrixXd slopes;
+    inputSlopes(k, still, &o, serial_ ? &slopes : nullptr);
+    if (serial_) reckonSerialNoise(slopes, &o);
+  } else if (yaw_ >= 0 || serial_) {
     Eigen::MatrixXd covariance, slopes;
     inheritedWithSlopes(k, still, &covariance, &slopes);
     if (yaw_ >= 0) shrinkYawNoise(&covariance, &slopes);
-    if (state_inputs_.empty()) o.extra_covariance = covariance(o.channels, o.channels);
-    reckonSerialNoise(slopes, &o);
-  } else if (!state_inputs_.empty()) {
-    inputSlopes(k, still, &o);
-  } else if (yaw_ >= 0) {
-    Eigen::MatrixXd covariance, slopes;
-    inheritedWithSlopes(k, still, &covariance, &slopes);
-    shrinkYawNoise(&covariance, &slopes);
     o.extra_covariance = covariance(o.channels, o.channels);
+    if (serial_) reckonSerialNoise(slopes, &o);
   } else if (still.standing) {
     if (!travels_at_) updateInputNoise();
     const Eigen::MatrixXd standing =
@@ -319,7 +315,8 @@ void RoadFreeStream::inheritedWithSlopes(std::size_t k, const Standstill::Decisi
   *slopes = travel_slopes / std::sqrt(count) + other_slopes;
 }
 
-void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o) {
+void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o,
+                                 Eigen::MatrixXd* all_slopes) {
   // Each input's noise at this sample against that at the one before: a
   // stop's travel is the mean of the readings since it began, N of them,
   // whose mean over N - 1 it shares by sqrt((N - 1) / N); a blended travel's
@@ -350,6 +347,7 @@ void RoadFreeStream::inputSlopes(std::size_t k, const Standstill::Decision& stil
   o->extra_covariance = covariance(o->channels, o->channels);
   o->input_slopes = carried(o->channels, Eigen::all);
   o->input_correlation = rho;
+  if (all_slopes) *all_slopes = std::move(slopes);
 }
 
 void RoadFreeStream::reckonSerialNoise(const Eigen::MatrixXd& slopes, Measurement* o) {

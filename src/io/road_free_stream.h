@@ -112,8 +112,10 @@ class RoadFreeStream {
   void observeInterval(double t);
   void updateInputNoise();
   // filter.horizon.input_noise: state: this sample's inherited covariance
-  // and its inputs' slopes and lag-1 correlations (Measurement::input_slopes).
-  void inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o);
+  // and its inputs' slopes and lag-1 correlations (Measurement::input_slopes);
+  // `all_slopes`: every input's slopes, carried or not (reckonSerialNoise).
+  void inputSlopes(std::size_t k, const Standstill::Decision& still, Measurement* o,
+                   Eigen::MatrixXd* all_slopes = nullptr);
   // Sample k's inherited covariance and its inputs' slopes (a stop's: the
   // travels' over the readings averaged, no rate).
   void inheritedWithSlopes(std::size_t k, const Standstill::Decision& still,
