@@ -114,7 +114,6 @@ class HealthMonitor {
   HealthSettings settings_;
   std::shared_ptr<const SupportDraws> draws_;  // shared by monitors of the same basis
   Eigen::VectorXd near_;                       // support_draws: mean + first-degree terms (reused)
-  Eigen::MatrixXd near_all_;                   // draws x parameters: the same, several at once
   Eigen::RowVectorXd row_;                     // one quantity's coefficients, contiguous (reused)
   std::vector<Eigen::Index> candidates_;       // draws the bounds do not show inside (reused)
   Eigen::VectorXd lower_, upper_;

@@ -198,9 +198,21 @@ bool MovingHorizon::readingsAt(const Eigen::MatrixXd& th, double time, Eigen::Ar
   const MechanicalModel& model = propagator_.model();
   y = Eigen::ArrayXXd::Zero(model.stateSize(), th.cols());
   if (!anchor_rows_.empty()) return anchoredReadings(th, time, y, shift, roll, lateral);
-  auto batch = model.prepare(propagator_.mapping().fullParameters(th));
-  if (roll.size() > 0 && !batch->offsetPoints(roll, lateral)) return false;
-  batch->readingsShifted(time, shift, y);
+  Prepared& kept = prepared_[th.cols() == 1 ? 1 : 0];
+  Eigen::MatrixXd full = propagator_.mapping().fullParameters(th);
+  const bool offsets = roll.size() > 0;
+  if (!(kept.batch && kept.offsets == offsets && kept.full.cols() == full.cols() && kept.full == full)) {
+    kept.batch.reset();
+    for (Eigen::Index q = 0; q < full.cols(); ++q) {
+      if (!model.invalidReason(full.col(q)).empty()) return false;
+    }
+    kept.batch = model.prepare(full);
+    kept.full = std::move(full);
+    kept.offsets = offsets;
+  }
+  ModelBatch& batch = *kept.batch;
+  if (offsets && !batch.offsetPoints(roll, lateral)) return false;
+  batch.readingsShifted(time, shift, y);
   evaluations_ += th.cols();
   return true;
 }
@@ -225,10 +237,7 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
   }
   Eigen::MatrixXd th(n, n + 1);
   for (int i = 0; i <= n; ++i) th.col(i) = theta(zeta.col(i));
-  const Eigen::MatrixXd full = propagator_.mapping().fullParameters(th);
-  for (int i = 0; i <= n; ++i) {
-    if (!model.invalidReason(full.col(i)).empty()) return false;
-  }
+  // readingsAt refuses a point that is not admissible (false).
   // With a clock offset the IMU stamped m.time read what the inputs drove
   // at m.time - offset.
   const double shift = offset_ >= 0 ? shiftedOffset(at[offset_]) : 0.0;
@@ -607,7 +616,7 @@ bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eig
   both.rightCols(cols) = th;
   for (int r : anchor_rows_) both.row(r).tail(cols).setConstant(anchor_[r]);
   const Eigen::MatrixXd full = propagator_.mapping().fullParameters(both);
-  for (Eigen::Index c = cols; c < 2 * cols; ++c) {
+  for (Eigen::Index c = 0; c < 2 * cols; ++c) {
     if (!model.invalidReason(full.col(c)).empty()) return false;
   }
   Eigen::ArrayXXd all = Eigen::ArrayXXd::Zero(model.stateSize(), 2 * cols);

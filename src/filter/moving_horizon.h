@@ -28,6 +28,7 @@
 #include <cmath>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <limits>
 #include <string>
 #include <vector>
@@ -165,6 +166,21 @@ class MovingHorizon {
                   const Eigen::VectorXd& roll = Eigen::VectorXd(),
                   const Eigen::VectorXd& lateral = Eigen::VectorXd());
   void endWindow(HorizonStep& s);
+  // The last prepared batches (many columns, and one: the offset's slope),
+  // kept with their full parameters: a window's re-run predicts every sample
+  // at one point, and its static equilibria are solved once.
+  struct Prepared {
+    Eigen::MatrixXd full;
+    std::unique_ptr<ModelBatch> batch;
+    bool offsets = false;
+    Prepared() = default;
+    Prepared(const Prepared&) {}  // a copy of the filter prepares afresh
+    Prepared& operator=(const Prepared&) {
+      batch.reset();
+      return *this;
+    }
+  };
+  Prepared prepared_[2];
   // reopen() with the roll angle carried: the angle's error moved to the
   // new load's static tilt (false: not possible, nothing changed).
   bool reanchorAngle(const std::vector<int>& rows);

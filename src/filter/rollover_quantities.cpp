@@ -2,7 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
+#include <memory>
+#include <mutex>
 #include <stdexcept>
+#include <tuple>
+#include <utility>
 
 #include "pc_ekf/pc/sparse_grid.h"
 
@@ -105,6 +110,46 @@ Eigen::MatrixXd projectValues(const PolynomialBasis& basis, const Eigen::MatrixX
   return values * weights.asDiagonal() * psi;
 }
 
+namespace {
+
+// The rule of a basis (nodes and weights): its basis values are evaluated a
+// block of nodes at a time where used, not kept (Q x S is megabytes).
+struct Rule {
+  Eigen::MatrixXd nodes;  // Q x dimension
+  Eigen::VectorXd weights;
+};
+using RuleKey = std::tuple<std::vector<std::tuple<int, double, double>>, int,
+                           std::vector<std::vector<int>>>;
+
+// One rule per basis content for the process, made once (in the background
+// when prepareRolloverRule came first) and shared by every thread.
+std::shared_future<std::shared_ptr<const Rule>> ruleOf(const PolynomialBasis& basis) {
+  std::vector<std::tuple<int, double, double>> germs;
+  for (const GermSpec& g : basis.germs()) germs.emplace_back(static_cast<int>(g.family), g.alpha, g.beta);
+  RuleKey key{std::move(germs), basis.order(), basis.multiIndices()};
+  static std::mutex mutex;
+  static std::vector<std::pair<RuleKey, std::shared_future<std::shared_ptr<const Rule>>>> cache;
+  std::lock_guard<std::mutex> lock(mutex);
+  for (const auto& [k, v] : cache) {
+    if (k == key) return v;
+  }
+  std::shared_future<std::shared_ptr<const Rule>> made =
+      std::async(std::launch::async, [basis] {
+        auto r = std::make_shared<Rule>();
+        projectionRule(basis, &r->nodes, &r->weights);
+        return std::shared_ptr<const Rule>(std::move(r));
+      }).share();
+  if (cache.size() >= 4) cache.erase(cache.begin());
+  cache.emplace_back(std::move(key), made);
+  return made;
+}
+
+}  // namespace
+
+void prepareRolloverRule(const ParameterMapping& mapping, const PolynomialBasis& basis) {
+  if (hasRolloverQuantities(mapping)) ruleOf(basis);
+}
+
 DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const PolynomialBasis& basis,
                                      const Eigen::MatrixXd& parameter_coefficients) {
   DerivedExpansions out;
@@ -113,41 +158,28 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
       parameter_coefficients.rows() != mapping.count()) {
     return out;
   }
-  // The rule and the basis at its nodes, once per basis and thread (the node
-  // projects at every published sample; a sparse grid has thousands of nodes).
-  // Keyed by the basis's content (germs, order, multi-indices).
-  struct Rule {
-    std::vector<GermSpec> germs;
-    int order = -1;
-    std::vector<std::vector<int>> indices;
-    Eigen::MatrixXd psi;  // Q x S
-    Eigen::VectorXd weights;
-  };
-  thread_local Rule rule;
-  const auto same_germs = [&] {
-    if (rule.germs.size() != basis.germs().size()) return false;
-    for (std::size_t i = 0; i < rule.germs.size(); ++i) {
-      const GermSpec &a = rule.germs[i], &b = basis.germs()[i];
-      if (a.family != b.family || a.alpha != b.alpha || a.beta != b.beta) return false;
-    }
-    return true;
-  };
-  if (rule.order != basis.order() || rule.indices != basis.multiIndices() || !same_germs()) {
-    Eigen::MatrixXd nodes;
-    projectionRule(basis, &nodes, &rule.weights);
-    rule.psi = basis.evaluate(nodes);
-    rule.germs = basis.germs();
-    rule.order = basis.order();
-    rule.indices = basis.multiIndices();
+  const std::shared_ptr<const Rule> rule = ruleOf(basis).get();
+  // The terms any parameter uses (an affine expansion: the first degree).
+  std::vector<Eigen::Index> used;
+  for (Eigen::Index j = 0; j < parameter_coefficients.cols(); ++j) {
+    if ((parameter_coefficients.col(j).array() != 0.0).any()) used.push_back(j);
   }
-  const Eigen::MatrixXd& psi = rule.psi;
-  const Eigen::VectorXd& weights = rule.weights;
-  // The parameters' values at the nodes (count x Q), then every model value.
-  const Eigen::MatrixXd theta = parameter_coefficients * psi.transpose();
-  const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
-  if (!values.allFinite()) return out;
+  const Eigen::MatrixXd c = parameter_coefficients(Eigen::all, used);
+  // c_j = sum_q w_q f(theta(xi_q)) psi_j(xi_q), a block of nodes at a time
+  // (its basis values stay small and in cache).
+  constexpr Eigen::Index kBlock = 64;
+  const Eigen::Index q_all = rule->nodes.rows();
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(3, basis.size());
+  for (Eigen::Index q0 = 0; q0 < q_all; q0 += kBlock) {
+    const Eigen::Index count = std::min(kBlock, q_all - q0);
+    const Eigen::MatrixXd psi = basis.evaluate(rule->nodes.middleRows(q0, count));  // count x S
+    const Eigen::MatrixXd theta = c * psi(Eigen::all, used).transpose();
+    const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
+    if (!values.allFinite()) return out;
+    sum.noalias() += values * rule->weights.segment(q0, count).asDiagonal() * psi;
+  }
   out.names = rolloverQuantityNames();
-  out.coefficients = values * weights.asDiagonal() * psi;  // projectValues
+  out.coefficients = std::move(sum);
   return out;
 }
 

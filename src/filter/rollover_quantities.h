@@ -49,6 +49,11 @@ void projectionRule(const PolynomialBasis& basis, Eigen::MatrixXd* nodes, Eigen:
 Eigen::MatrixXd projectValues(const PolynomialBasis& basis, const Eigen::MatrixXd& nodes,
                               const Eigen::VectorXd& weights, const Eigen::MatrixXd& values);
 
+// Starts making the rule of `basis` in the background (a sparse grid over
+// many germs takes milliseconds), for rolloverExpansions to find made; nothing
+// without heights.
+void prepareRolloverRule(const ParameterMapping& mapping, const PolynomialBasis& basis);
+
 // The rollover expansions of parameters whose expansions are
 // `parameter_coefficients` (mapping.count() x basis.size()): the quantities
 // at the parameters' values at projectionRule's nodes, projected. Empty when

@@ -9,6 +9,7 @@
 
 #include "pc_ekf/filter/batch_update.h"
 #include "pc_ekf/filter/ensemble_kalman_filter.h"
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/reference/reference_posterior.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/io/offline_one_step.h"
@@ -108,6 +109,7 @@ void runBatch(const EstimatorConfig& c, const MeasurementSeries& series,
               std::shared_ptr<const PcPropagator> prop, const std::vector<double>& alphas,
               SampleSink* sink, OfflineResult* r) {
   const PdfSamplerFuture pdf_sampler = startPdfSampler(c, prop->basis());
+  prepareRolloverRule(prop->mapping(), prop->basis());
   if (sink) sink->begin(columnsOf(c, {}));
   const BatchOutcome o = runBatchEstimate(c, *prop, series, alphas);
   const BatchResult& b = o.result;

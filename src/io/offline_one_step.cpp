@@ -3,6 +3,7 @@
 #include <stdexcept>
 
 #include "pc_ekf/filter/health.h"
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/io/estimation_setup.h"
 
 namespace pc_ekf::offline {
@@ -51,6 +52,7 @@ OneStepRun::OneStepRun(const EstimatorConfig& c,
       prop_(makePropagator(c, model)),
       settings_(supportEvery(makeOneStepSettings(c))),
       filter_(prop_, settings_) {
+  prepareRolloverRule(prop_->mapping(), prop_->basis());  // made while the filter runs
   // The leading channels the model gives as built (ForecastReport::loo_error).
   for (std::size_t i = 0;
        i < model->channelNames().size() && model->channelModelled(static_cast<int>(i)); ++i) {

@@ -32,6 +32,7 @@ struct RoadFreeConstants {
   // Some point has heights, a bar or an IMU height, or a_y is read: the
   // general outputs (else the paper's, bit for bit).
   bool elevated = false;
+  bool elevated_points = false;  // elevated as constants() found it (before any offsets)
 };
 
 namespace {
@@ -133,6 +134,8 @@ class RoadFreeBatch : public ModelBatch {
   void readings(double t, Eigen::ArrayXXd& y) const override { readingsShifted(t, 0.0, y); }
   bool offsetPoints(const Eigen::VectorXd& roll, const Eigen::VectorXd& lateral) override {
     if (c_->gyro < 0 || roll.size() != pointCount() || lateral.size() != pointCount()) return false;
+    // Offsets replace earlier ones (a batch prepared once, offset per sample).
+    c_->elevated = c_->elevated_points;
     for (int q = 0; q < pointCount(); ++q) {
       RoadFreeConstants::Point& p = c_->points[static_cast<std::size_t>(q)];
       p.roll_offset = roll[q];
@@ -265,6 +268,7 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
   c->speed = speed_;
   c->yaw = yaw_;
   c->elevated = speed_ >= 0;
+  c->points.reserve(static_cast<std::size_t>(params.cols()));
   const std::vector<StaticEquilibrium> loaded = solveStaticEquilibria(params);
   const bool tare = zero_ == ZeroConvention::kTare;
   std::vector<StaticEquilibrium> unloaded;
@@ -313,6 +317,7 @@ std::unique_ptr<RoadFreeConstants> RollPlaneRoadFreeModel::constants(
     a.rest_z = tare ? 0.0 : p[at.gravity] * std::cos(a.roll_static);
     c->points.push_back(a);
   }
+  c->elevated_points = c->elevated;
   return c;
 }
 

@@ -8,6 +8,7 @@
 #include <functional>
 #include <stdexcept>
 
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/io/estimation_setup.h"
 #include "pc_ekf/ros/estimator_checkpoint.h"
 #include "pc_ekf/ros/ros_config.h"
@@ -82,6 +83,7 @@ EstimatorRos::EstimatorRos(ros::NodeHandle nh, ros::NodeHandle pnh, const std::s
     analytic_propagator_ = makePropagator(config_, makeModel(config_, makeRoad(config_)));
     prior_propagator_ = analytic_propagator_;
   }
+  prepareRolloverRule(prior_propagator_->mapping(), prior_propagator_->basis());
   if (config_.node.publish_pdf) {
     pdfs_ = makePdfSampler(config_, prior_propagator_->basis(),
                            prior_propagator_->parameterCount());
