@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <limits>
 #include <stdexcept>
 
@@ -193,12 +194,12 @@ void MovingHorizon::startWindow() {
 }
 
 bool MovingHorizon::readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
-                               double shift, const Eigen::VectorXd& roll,
-                               const Eigen::VectorXd& lateral) {
+                               Workspace& ws, double shift, const Eigen::VectorXd& roll,
+                               const Eigen::VectorXd& lateral) const {
   const MechanicalModel& model = propagator_.model();
   y = Eigen::ArrayXXd::Zero(model.stateSize(), th.cols());
-  if (!anchor_rows_.empty()) return anchoredReadings(th, time, y, shift, roll, lateral);
-  Prepared& kept = prepared_[th.cols() == 1 ? 1 : 0];
+  if (!anchor_rows_.empty()) return anchoredReadings(th, time, y, shift, roll, lateral, ws);
+  Prepared& kept = ws.prepared[th.cols() == 1 ? 1 : 0];
   Eigen::MatrixXd full = propagator_.mapping().fullParameters(th);
   const bool offsets = roll.size() > 0;
   if (!(kept.batch && kept.offsets == offsets && kept.full.cols() == full.cols() && kept.full == full)) {
@@ -213,14 +214,14 @@ bool MovingHorizon::readingsAt(const Eigen::MatrixXd& th, double time, Eigen::Ar
   ModelBatch& batch = *kept.batch;
   if (offsets && !batch.offsetPoints(roll, lateral)) return false;
   batch.readingsShifted(time, shift, y);
-  evaluations_ += th.cols();
+  ws.evaluations += th.cols();
   return true;
 }
 
 bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& noise,
                             const Eigen::VectorXd& at, Eigen::VectorXd* values,
                             Eigen::VectorXd* z0, Eigen::MatrixXd* jacobian,
-                            Eigen::VectorXd* variances) {
+                            Eigen::VectorXd* variances, Workspace& ws) const {
   const MechanicalModel& model = propagator_.model();
   const int n = parameters_;
   const int c = static_cast<int>(m.channels.size());
@@ -264,7 +265,7 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
     if (cross_ >= 0) laterals[n + 2] = kCrossFallGravity * std::sin(at[cross_] + kRollStep);
   }
   Eigen::ArrayXXd y;
-  if (!readingsAt(thx, m.time, y, shift, rolls, laterals)) return false;
+  if (!readingsAt(thx, m.time, y, ws, shift, rolls, laterals)) return false;
   Eigen::MatrixXd z(c, y.cols());
   for (int r = 0; r < c; ++r) {
     z.row(r) = model.observationMatrix().row(m.channels[static_cast<std::size_t>(r)]) * y.matrix();
@@ -330,8 +331,8 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
       Eigen::ArrayXXd later, earlier;
       const Eigen::VectorXd r1 = Eigen::VectorXd::Constant(nuisance ? 1 : 0, roll);
       const Eigen::VectorXd l1 = Eigen::VectorXd::Constant(nuisance ? 1 : 0, lateral);
-      if (!readingsAt(th.col(0), m.time, later, shift + h, r1, l1)) return false;
-      if (!readingsAt(th.col(0), m.time, earlier, shift - h, r1, l1)) return false;
+      if (!readingsAt(th.col(0), m.time, later, ws, shift + h, r1, l1)) return false;
+      if (!readingsAt(th.col(0), m.time, earlier, ws, shift - h, r1, l1)) return false;
       const Eigen::VectorXd slope =
           (later.matrix().col(0) - earlier.matrix().col(0)) * (settings_.clock_offset / (2.0 * h));
       for (int r = 0; r < c; ++r) {
@@ -416,7 +417,7 @@ HorizonStep MovingHorizon::propose(const Measurement& m, const NoiseModel& noise
     *cov = cov_;
     // The offset's slope needs a sample before this one.
     const double dt = previous_time_ > 0.0 ? m.time - previous_time_ : 0.0;
-    const bool ok = predict(m, dt, noise, at_, &values, &z0, &j, &r);
+    const bool ok = predict(m, dt, noise, at_, &values, &z0, &j, &r, own_);
     if (!ok) {
       s.update = UpdateDiagnostics();
       s.update.finite = false;
@@ -466,19 +467,53 @@ void MovingHorizon::endWindow(HorizonStep& s) {
     const Eigen::VectorXd at = mean_;
     Eigen::VectorXd mean = window_mean_;
     Eigen::MatrixXd cov = window_cov_;
+    // Every prediction is at `at`, independent of the updates: the later
+    // samples' are made on a second thread while this one predicts the
+    // earlier ones and updates (the same numbers: each is a function of its
+    // sample and `at`).
+    struct Predicted {
+      bool ok = false;
+      Eigen::VectorXd values, z0, r;
+      Eigen::MatrixXd j;
+    };
+    std::vector<Predicted> predicted(kept_.size());
+    const auto predictOne = [&](std::size_t i, Workspace& ws) {
+      const Kept& k = kept_[i];
+      Predicted& p = predicted[i];
+      p.ok = predict(k.m, k.m.time - k.dt > 0.0 ? k.dt : 0.0, *noise_, at, &p.values, &p.z0, &p.j,
+                     &p.r, ws);
+    };
+    // The filter's thread also updates: it takes the first ~40 %.
+    const std::size_t split = kept_.size() * 2 / 5;
+    const bool helper = kept_.size() >= 16;
+    std::future<void> later;
+    bool helped = false;  // its predictions are in
+    if (helper) {
+      later = std::async(std::launch::async, [&] {
+        for (std::size_t i = split; i < kept_.size(); ++i) {
+          if (kept_[i].used) predictOne(i, helper_);
+        }
+      });
+    }
     bool ok = true;
-    for (Kept& k : kept_) {
+    for (std::size_t i = 0; i < kept_.size(); ++i) {
+      Kept& k = kept_[i];
       walk(cov, k.dt);
       advanceInputs(k.m, mean, cov);
       if (!k.used) continue;
-      Eigen::VectorXd values, z0, r;
-      Eigen::MatrixXd j;
+      if (!helper || i < split) {
+        predictOne(i, own_);
+      } else if (!helped) {
+        later.get();  // the helper's predictions (rethrows its exception)
+        helped = true;
+      }
+      const Predicted& p = predicted[i];
       UpdateDiagnostics d;
-      if (!predict(k.m, k.m.time - k.dt > 0.0 ? k.dt : 0.0, *noise_, at, &values, &z0, &j, &r)) {
+      if (!p.ok) {
         ok = false;
         break;
       }
-      linearUpdate(values, z0, j, r, at, mean, cov, &d);
+      linearUpdate(p.values, p.z0, p.j, p.r, at, mean, cov, &d);
       if (!d.finite) {
         ok = false;
         break;
@@ -605,7 +640,7 @@ Eigen::ArrayXd MovingHorizon::tilts(const Eigen::ArrayXXd& y) const {
 
 bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
                                      double shift, const Eigen::VectorXd& roll,
-                                     const Eigen::VectorXd& lateral) {
+                                     const Eigen::VectorXd& lateral, Workspace& ws) const {
   // Each column twice: as it is and with the load at the anchor. The second
   // gives the tilt the body has at the anchor (the gyro's integral is the
   // same in both); accel_y and accel_z are turned to it (tare: no offsets).
@@ -628,7 +663,7 @@ bool MovingHorizon::anchoredReadings(const Eigen::MatrixXd& th, double time, Eig
     if (!batch->offsetPoints(r2, l2)) return false;
   }
   batch->readingsShifted(time, shift, all);
-  evaluations_ += 2 * cols;
+  ws.evaluations += 2 * cols;
   const Eigen::ArrayXd tilt = tilts(all);
   y = all.leftCols(cols);
   const Eigen::MatrixXd& h = model.observationMatrix();

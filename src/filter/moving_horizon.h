@@ -94,7 +94,7 @@ class MovingHorizon {
   void reopen(const std::vector<int>& rows);
   // Random walk: variance intensity_i^2 dt added to parameter i.
   void drift(const Eigen::VectorXd& intensity, double dt);
-  long evaluations() const { return evaluations_; }
+  long evaluations() const { return evaluations_ + own_.evaluations + helper_.evaluations; }
   double lastTime() const { return previous_time_; }  // the last sample's time
   // The first sample time a re-run may read (infinity: none kept): the
   // window's, a load change's rewind over the recent samples, and the clock
@@ -155,20 +155,10 @@ class MovingHorizon {
   // Predicted readings of m's channels at zeta and along each parameter
   // (whitened); false when a point is not admissible or not finite.
   // dt: the time since the sample before (the clock offset's slope).
-  bool predict(const Measurement& m, double dt, const NoiseModel& noise,
-               const Eigen::VectorXd& at, Eigen::VectorXd* values, Eigen::VectorXd* z0,
-               Eigen::MatrixXd* jacobian, Eigen::VectorXd* variances);
-  // Readings (model state rows) of parameter columns th at `time`, the
-  // inputs `shift` earlier (ModelBatch::readingsShifted).
-  // roll, lateral: per column, the roll offset and lateral specific force
-  // the model takes (ModelBatch::offsetPoints); empty: none.
-  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y, double shift = 0.0,
-                  const Eigen::VectorXd& roll = Eigen::VectorXd(),
-                  const Eigen::VectorXd& lateral = Eigen::VectorXd());
-  void endWindow(HorizonStep& s);
   // The last prepared batches (many columns, and one: the offset's slope),
   // kept with their full parameters: a window's re-run predicts every sample
-  // at one point, and its static equilibria are solved once.
+  // at one point, and its static equilibria are solved once. One workspace
+  // per thread that predicts (the filter's, a re-run's helper).
   struct Prepared {
     Eigen::MatrixXd full;
     std::unique_ptr<ModelBatch> batch;
@@ -180,7 +170,23 @@ class MovingHorizon {
       return *this;
     }
   };
-  Prepared prepared_[2];
+  struct Workspace {
+    Prepared prepared[2];
+    long evaluations = 0;  // model evaluations made here
+  };
+  bool predict(const Measurement& m, double dt, const NoiseModel& noise,
+               const Eigen::VectorXd& at, Eigen::VectorXd* values, Eigen::VectorXd* z0,
+               Eigen::MatrixXd* jacobian, Eigen::VectorXd* variances, Workspace& ws) const;
+  // Readings (model state rows) of parameter columns th at `time`, the
+  // inputs `shift` earlier (ModelBatch::readingsShifted).
+  // roll, lateral: per column, the roll offset and lateral specific force
+  // the model takes (ModelBatch::offsetPoints); empty: none.
+  bool readingsAt(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y, Workspace& ws,
+                  double shift = 0.0, const Eigen::VectorXd& roll = Eigen::VectorXd(),
+                  const Eigen::VectorXd& lateral = Eigen::VectorXd()) const;
+  void endWindow(HorizonStep& s);
+  Workspace own_;     // the filter's thread
+  Workspace helper_;  // the second thread of a window's re-run
   // reopen() with the roll angle carried: the angle's error moved to the
   // new load's static tilt (false: not possible, nothing changed).
   bool reanchorAngle(const std::vector<int>& rows);
@@ -189,7 +195,8 @@ class MovingHorizon {
   // Readings of parameter columns th (theta) with the angle at the anchor's
   // tilt (after a load change); false: not admissible or not finite.
   bool anchoredReadings(const Eigen::MatrixXd& th, double time, Eigen::ArrayXXd& y,
-                        double shift, const Eigen::VectorXd& roll, const Eigen::VectorXd& lateral);
+                        double shift, const Eigen::VectorXd& roll, const Eigen::VectorXd& lateral,
+                        Workspace& ws) const;
   std::vector<int> anchor_rows_;  // the load's rows, once a load change came
   Eigen::VectorXd anchor_;        // theta: the load at the start (its mean then)
   void startWindow();
