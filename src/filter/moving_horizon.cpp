@@ -490,8 +490,11 @@ void MovingHorizon::endWindow(HorizonStep& s) {
     bool helped = false;  // its predictions are in
     if (helper) {
       later = std::async(std::launch::async, [&] {
+        // Up to the first failure, as the sequential loop would go.
         for (std::size_t i = split; i < kept_.size(); ++i) {
-          if (kept_[i].used) predictOne(i, helper_);
+          if (!kept_[i].used) continue;
+          predictOne(i, helper_);
+          if (!predicted[i].ok) break;
         }
       });
     }
