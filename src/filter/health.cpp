@@ -8,6 +8,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "pc_ekf/pc/basis_key.h"
 #include "pc_ekf/pc/orthonormal_family.h"
 #include "pc_ekf/pc/pc_statistics.h"
 
@@ -63,14 +64,11 @@ namespace {
 // The support draws' basis values (HealthMonitor::SupportDraws) depend only on
 // the basis, the draws and the seed: the filters of one run (full rate,
 // coherence, a deferred re-run's) share them instead of drawing them again.
-using SupportKey = std::tuple<std::vector<std::tuple<int, double, double>>,
-                              std::vector<std::vector<int>>, int, std::uint64_t>;
+using SupportKey = std::tuple<BasisKey, int, std::uint64_t>;
 
 std::shared_ptr<const HealthMonitor::SupportDraws> supportDraws(const PolynomialBasis& basis,
                                                                 int draws, std::uint64_t seed) {
-  std::vector<std::tuple<int, double, double>> germs;
-  for (const GermSpec& g : basis.germs()) germs.emplace_back(static_cast<int>(g.family), g.alpha, g.beta);
-  SupportKey key{std::move(germs), basis.multiIndices(), draws, seed};
+  SupportKey key{basisKey(basis), draws, seed};
   static std::mutex mutex;
   static std::vector<std::pair<SupportKey, std::shared_ptr<const HealthMonitor::SupportDraws>>> cache;
   std::lock_guard<std::mutex> lock(mutex);

@@ -9,6 +9,7 @@
 #include <tuple>
 #include <utility>
 
+#include "pc_ekf/pc/basis_key.h"
 #include "pc_ekf/pc/sparse_grid.h"
 
 namespace pc_ekf {
@@ -118,17 +119,12 @@ struct Rule {
   Eigen::MatrixXd nodes;  // Q x dimension
   Eigen::VectorXd weights;
 };
-using RuleKey = std::tuple<std::vector<std::tuple<int, double, double>>, int,
-                           std::vector<std::vector<int>>>;
-
 // One rule per basis content for the process, made once (in the background
 // when prepareRolloverRule came first) and shared by every thread.
 std::shared_future<std::shared_ptr<const Rule>> ruleOf(const PolynomialBasis& basis) {
-  std::vector<std::tuple<int, double, double>> germs;
-  for (const GermSpec& g : basis.germs()) germs.emplace_back(static_cast<int>(g.family), g.alpha, g.beta);
-  RuleKey key{std::move(germs), basis.order(), basis.multiIndices()};
+  BasisKey key = basisKey(basis);
   static std::mutex mutex;
-  static std::vector<std::pair<RuleKey, std::shared_future<std::shared_ptr<const Rule>>>> cache;
+  static std::vector<std::pair<BasisKey, std::shared_future<std::shared_ptr<const Rule>>>> cache;
   std::lock_guard<std::mutex> lock(mutex);
   for (const auto& [k, v] : cache) {
     if (k == key) return v;
