@@ -225,19 +225,20 @@ bool MovingHorizon::predict(const Measurement& m, double dt, const NoiseModel& n
   const MechanicalModel& model = propagator_.model();
   const int n = parameters_;
   const int c = static_cast<int>(m.channels.size());
-  Eigen::MatrixXd zeta(n, n + 1);
+  // Column 0 the point, column i + 1 one step along parameter i: each
+  // column's theta differs from the point's in one entry only.
+  const Eigen::VectorXd point = theta(at.head(n));
   Eigen::VectorXd steps(n);
-  for (int i = 0; i <= n; ++i) zeta.col(i) = at.head(n);
+  Eigen::MatrixXd th(n, n + 1);
+  th.colwise() = point;
   for (int i = 0; i < n; ++i) {
     // A step inside the support (backwards near its upper end).
     double h = settings_.step;
-    const double up = theta(at.head(n))[i] + h * prior_std_[i];
+    const double up = point[i] + h * prior_std_[i];
     if (!(up < upper_[i])) h = -h;
     steps[i] = h;
-    zeta(i, i + 1) += h;
+    th(i, i + 1) = prior_mean_[i] + prior_std_[i] * (at[i] + h);
   }
-  Eigen::MatrixXd th(n, n + 1);
-  for (int i = 0; i <= n; ++i) th.col(i) = theta(zeta.col(i));
   // readingsAt refuses a point that is not admissible (false).
   // With a clock offset the IMU stamped m.time read what the inputs drove
   // at m.time - offset.

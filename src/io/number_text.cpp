@@ -11,6 +11,11 @@ namespace pc_ekf {
 
 namespace {
 
+constexpr char kDigitPairs[] =
+    "00010203040506070809101112131415161718192021222324252627282930313233343536373839"
+    "40414243444546474849505152535455565758596061626364656667686970717273747576777879"
+    "8081828384858687888990919293949596979899";
+
 // %.17g of v where |v| is in [1e-6, 1e17) (the CSVs' numbers), by exact
 // 128-bit arithmetic: the 17 significant digits are the integer part of
 // m 10^s / 2^-e (v = m 2^e, s = 16 - x), rounded half to even on the exact
@@ -66,19 +71,21 @@ bool exactG17(double v, char* out, char** end) {
     digits = pow10[16];
     ++x;
   }
+  // The 17 digits two at a time (9 + 8: each half fits 32 bits).
   char d[17];
   {
     const std::uint64_t dd = static_cast<std::uint64_t>(digits);
-    std::uint32_t hi = static_cast<std::uint32_t>(dd / 1000000000u);  // 8 digits
-    std::uint32_t lo = static_cast<std::uint32_t>(dd % 1000000000u);  // 9 digits
-    for (int i = 16; i >= 8; --i) {
-      d[i] = static_cast<char>('0' + lo % 10);
-      lo /= 10;
+    std::uint32_t hi = static_cast<std::uint32_t>(dd / 100000000u);  // 9 digits
+    std::uint32_t lo = static_cast<std::uint32_t>(dd % 100000000u);  // 8 digits
+    for (int i = 15; i >= 9; i -= 2) {
+      std::memcpy(d + i, kDigitPairs + 2 * (lo % 100), 2);
+      lo /= 100;
     }
-    for (int i = 7; i >= 0; --i) {
-      d[i] = static_cast<char>('0' + hi % 10);
-      hi /= 10;
+    for (int i = 7; i >= 1; i -= 2) {
+      std::memcpy(d + i, kDigitPairs + 2 * (hi % 100), 2);
+      hi /= 100;
     }
+    d[0] = static_cast<char>('0' + hi);
   }
   int len = 17;
   while (len > 1 && d[len - 1] == '0') --len;  // trailing zeros go (%g)
@@ -124,17 +131,22 @@ std::string roundTripText(double v) {
   return std::string(text, r.ptr);
 }
 
-void appendG17(std::string& out, double v) {
+char* writeG17(char* out, double v) {
   if (v == 0.0) {  // most of an affine expansion's coefficients: to_chars' slow path
-    out.append(std::signbit(v) ? "-0" : "0");
-    return;
+    if (std::signbit(v)) *out++ = '-';
+    *out++ = '0';
+    return out;
   }
-  char text[40];
   char* end = nullptr;
-  if (!exactG17(v, text, &end)) {
-    end = std::to_chars(text, text + sizeof(text), v, std::chars_format::general, 17).ptr;
+  if (!exactG17(v, out, &end)) {
+    end = std::to_chars(out, out + kG17Chars, v, std::chars_format::general, 17).ptr;
   }
-  out.append(text, static_cast<std::size_t>(end - text));  // (pointer, count): no replace path
+  return end;
+}
+
+void appendG17(std::string& out, double v) {
+  char text[kG17Chars];
+  out.append(text, static_cast<std::size_t>(writeG17(text, v) - text));  // (pointer, count): no replace path
 }
 
 std::optional<double> parseFiniteDouble(const std::string& token) {

@@ -20,6 +20,12 @@ std::string roundTripText(double v);
 // n = 11 samples.csv: 60 ms by the stream, 8 by to_chars, 5 now).
 void appendG17(std::string& out, double v);
 
+// The longest text appendG17 writes ("-2.2250738585072014e-308": 24 chars).
+constexpr int kG17Chars = 32;
+// appendG17's text at `out` (room for kG17Chars); returns its end. For
+// writers that fill a buffer of their own (samples.csv: millions of numbers).
+char* writeG17(char* out, double v);
+
 // The token as a finite double; nothing when it is not one (or has trailing text).
 std::optional<double> parseFiniteDouble(const std::string& token);
 

@@ -88,7 +88,7 @@ class OfflineOutputs : public SampleSink {
   explicit OfflineOutputs(const std::string& dir);
   ~OfflineOutputs() override;
   void begin(const SampleColumns& columns) override;
-  void add(const SampleRecord& record) override;
+  void add(SampleRecord record) override;
   // samples.csv completed (only its header when no record came: the
   // columns of r), pdfs.csv and result.json written.
   void finish(const OfflineResult& r);

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <system_error>
+#include <utility>
 
 #include "pc_ekf/io/number_text.h"
 #include "pc_ekf/io/offline_estimation.h"
@@ -194,7 +195,7 @@ OfflineOutputs::~OfflineOutputs() = default;
 
 void OfflineOutputs::begin(const SampleColumns& columns) { samples_->begin(columns); }
 
-void OfflineOutputs::add(const SampleRecord& record) { samples_->add(record); }
+void OfflineOutputs::add(SampleRecord record) { samples_->add(std::move(record)); }
 
 void OfflineOutputs::finish(const OfflineResult& r) {
   SampleColumns columns;

@@ -44,7 +44,8 @@ class SampleSink {
  public:
   virtual ~SampleSink() = default;
   virtual void begin(const SampleColumns& columns) = 0;  // once, before the first record
-  virtual void add(const SampleRecord& record) = 0;
+  // By value: a record handed over (an rvalue) is moved, not copied.
+  virtual void add(SampleRecord record) = 0;
 };
 
 struct ParameterSummary {

@@ -1,5 +1,6 @@
 #include "pc_ekf/io/samples_csv.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <utility>
 
@@ -8,37 +9,51 @@
 namespace pc_ekf {
 namespace {
 
-// One row (appendG17: the stream's %.17g digits).
-void appendSampleRow(std::string& text, const SampleRecord& s, std::size_t loo_channels,
-                     int terms, bool load_transfer_ratio) {
-  text += std::to_string(s.index);
-  text += ',';
-  appendG17(text, s.time);
+// An upper bound on one row's length: every cell a number of kG17Chars and
+// its comma (the flags included), the index, the newline.
+std::size_t rowBound(const SampleRecord& s, std::size_t loo_channels, int terms) {
+  const std::size_t cells = 1 + static_cast<std::size_t>(s.mean.size()) *
+                                    (2 + static_cast<std::size_t>(terms)) +
+                            5 + loo_channels + 1;
+  return 24 + cells * (kG17Chars + 1) + 1;
+}
+
+// One row at `o` (appendG17's %.17g digits); returns its end.
+char* writeSampleRow(char* o, const SampleRecord& s, std::size_t loo_channels, int terms,
+                     bool load_transfer_ratio) {
+  const std::string index = std::to_string(s.index);
+  o = std::copy(index.begin(), index.end(), o);
+  *o++ = ',';
+  o = writeG17(o, s.time);
   for (Eigen::Index i = 0; i < s.mean.size(); ++i) {
-    text += ',';
-    appendG17(text, s.mean[i]);
-    text += ',';
-    appendG17(text, s.stddev[i]);
+    *o++ = ',';
+    o = writeG17(o, s.mean[i]);
+    *o++ = ',';
+    o = writeG17(o, s.stddev[i]);
     for (int j = 0; j < terms; ++j) {
-      text += ',';
-      appendG17(text, s.coefficients(i, j));
+      *o++ = ',';
+      o = writeG17(o, s.coefficients(i, j));
     }
   }
-  text += ',';
-  appendG17(text, s.nis);
-  for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) text += flag ? ",1" : ",0";
+  *o++ = ',';
+  o = writeG17(o, s.nis);
+  for (bool flag : {s.nis_window_outside, s.band_nested, s.healthy}) {
+    *o++ = ',';
+    *o++ = flag ? '1' : '0';
+  }
   // Empty cells: no leave-one-out error for this sample (a point left out).
   for (std::size_t i = 0; i < loo_channels; ++i) {
-    text += ',';
+    *o++ = ',';
     if (static_cast<std::size_t>(s.loo_error.size()) == loo_channels) {
-      appendG17(text, s.loo_error[i]);
+      o = writeG17(o, s.loo_error[i]);
     }
   }
   if (load_transfer_ratio) {
-    text += ',';
-    appendG17(text, s.load_transfer_ratio);
+    *o++ = ',';
+    o = writeG17(o, s.load_transfer_ratio);
   }
-  text += '\n';
+  *o++ = '\n';
+  return o;
 }
 
 }  // namespace
@@ -61,8 +76,8 @@ void SamplesCsv::begin(const SampleColumns& columns) {
   begun_ = true;
 }
 
-void SamplesCsv::add(const SampleRecord& record) {
-  open_.push_back(record);
+void SamplesCsv::add(SampleRecord record) {
+  open_.push_back(std::move(record));
   if (open_.size() < kBlockRows) return;
   hand(std::move(open_));
   open_.clear();
@@ -101,12 +116,14 @@ void SamplesCsv::write(const Block& block) {
   }
   // The first record's coefficient count names the columns of every row.
   if (!header_) writeHeader(static_cast<int>(block.front().coefficients.cols()));
-  text_.clear();
+  std::size_t bound = 0;
+  for (const SampleRecord& r : block) bound += rowBound(r, columns_.loo_channels.size(), terms_);
+  if (buffer_.size() < bound) buffer_.resize(bound);
+  char* o = buffer_.data();
   for (const SampleRecord& r : block) {
-    appendSampleRow(text_, r, columns_.loo_channels.size(), terms_,
-                    columns_.load_transfer_ratio);
+    o = writeSampleRow(o, r, columns_.loo_channels.size(), terms_, columns_.load_transfer_ratio);
   }
-  out_.write(text_.data(), static_cast<std::streamsize>(text_.size()));
+  out_.write(buffer_.data(), static_cast<std::streamsize>(o - buffer_.data()));
   if (!out_) {
     {
       std::lock_guard<std::mutex> lock(mutex_);

@@ -30,7 +30,7 @@ class SamplesCsv final : public SampleSink {
 
   void begin(const SampleColumns& columns) override;
   // Throws std::runtime_error once a write has failed.
-  void add(const SampleRecord& record) override;
+  void add(SampleRecord record) override;
   // Every row written and the file closed; without any record the header
   // alone, with `columns` when begin() was not called. Throws
   // std::runtime_error when a write failed.
@@ -51,7 +51,7 @@ class SamplesCsv final : public SampleSink {
   bool begun_ = false, header_ = false;
   int terms_ = 0;     // coefficient columns per parameter (the header's)
   Block open_;        // the caller's, filling
-  std::string text_;  // the thread's, reused block after block
+  std::vector<char> buffer_;  // the thread's text, reused block after block
   std::mutex mutex_;
   std::condition_variable wake_, room_;
   std::deque<Block> waiting_;  // guarded by mutex_

@@ -171,14 +171,22 @@ Vector7 linearSolve(const Matrix7& j, const Vector7& r) {
   return x;
 }
 
-FullCarEquilibrium solve(const FullCarColumn& p) {
+// From `start` when given (a neighbouring point's solution: three Newton
+// steps instead of a linear solve and five), else from the linear-spring
+// solution.
+FullCarEquilibrium solve(const FullCarColumn& p, const Vector7* start = nullptr) {
   const Setup s = setupOf(p);
   Matrix7 j;
-  // Linear springs: R is affine, so one solve from 0 is exact.
-  const Vector7 zero = Vector7::Zero();
-  const Vector7 r0 = residuals(s, zero, false, &j);
-  Vector7 x = -linearSolve(j, r0);
-  if (!x.allFinite()) fail("non-finite linear-spring solution", 0);
+  Vector7 x;
+  if (start) {
+    x = *start;
+  } else {
+    // Linear springs: R is affine, so one solve from 0 is exact.
+    const Vector7 zero = Vector7::Zero();
+    const Vector7 r0 = residuals(s, zero, false, &j);
+    x = -linearSolve(j, r0);
+    if (!x.allFinite()) fail("non-finite linear-spring solution", 0);
+  }
   int it = 0;
   bool converged = false;
   constexpr int kMaxIterations = 100;
@@ -239,6 +247,19 @@ FullCarEquilibrium solve(const FullCarColumn& p) {
 }  // namespace
 
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p) { return solve(p); }
+
+FullCarEquilibrium solveFullCarEquilibriumFrom(const FullCarColumn& p,
+                                               const FullCarEquilibrium& start) {
+  Vector7 x;
+  x << start.heave, start.pitch, start.roll, start.wheel_height[0], start.wheel_height[1],
+      start.wheel_height[2], start.wheel_height[3];
+  try {
+    if (x.allFinite()) return solve(p, &x);
+  } catch (const std::runtime_error&) {
+    // A start too far for Newton: the solve from the linear springs decides.
+  }
+  return solve(p);
+}
 
 FullCarEquilibriumKey fullCarEquilibriumKey(const FullCarColumn& p) {
   const Setup s = setupOf(p);

@@ -1,9 +1,11 @@
 // Full-car ride model: parameter checks and the batched right-hand side.
 #include "pc_ekf/model/full_car_model.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -30,7 +32,8 @@ namespace {
 
 // A direct-mapped table of the thread's latest equilibria, keyed by the exact
 // bits of what the solve reads (fullCarEquilibriumKey: a hit returns what the
-// solve would, it is deterministic). Not by the whole parameter vector: the
+// solve gave; with heights or bars it started from the thread's previous
+// solve, so a stream's numbers follow from its order, the same on every run). Not by the whole parameter vector: the
 // one-step filter's finite-difference Jacobian steps dampers, inertias and,
 // at the empty vehicle (tare), the load's position, which leave it as it is.
 struct EquilibriumMemo {
@@ -42,6 +45,43 @@ struct EquilibriumMemo {
   };
   static constexpr std::size_t kSlots = 1024;
   std::array<Slot, kSlots> slots;
+  // The thread's last solves: with heights or bars, a miss near one of them
+  // (every number the solve reads within 5 %: the filter's next step, its
+  // next sample's point, the empty vehicle's at the next point for `tare`,
+  // a few dozen solves later) starts Newton there. Without them the solve is always from the linear springs (their
+  // numbers stay as they were, bit for bit).
+  static constexpr std::size_t kRecent = 32;
+  std::array<const Slot*, kRecent> recent{};
+  std::size_t next_recent = 0;
+  const Slot* near(const FullCarEquilibriumKey& key) const {
+    if (key.back() == 0.0) return nullptr;
+    for (std::size_t k = 0; k < kRecent; ++k) {
+      const Slot* r = recent[(next_recent + kRecent - 1 - k) % kRecent];  // newest first
+      if (r && r->error.empty() && r->key.back() != 0.0 && close(key, r->key)) return r;
+    }
+    return nullptr;
+  }
+  // The load's moments (g M x_M, g M y_M: 0 at the middle) on the scale of
+  // the weight times a metre, every other number on its own.
+  static bool close(const FullCarEquilibriumKey& a, const FullCarEquilibriumKey& b) {
+    constexpr std::size_t kWeight = 25;
+    // The weight first: the loaded and the empty vehicle part there.
+    if (!(std::abs(a[kWeight] - b[kWeight]) <= 0.05 * std::abs(a[kWeight]))) return false;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+      const double scale = (i == kWeight + 1 || i == kWeight + 2)
+                               ? std::abs(a[kWeight])
+                               : std::max(std::abs(a[i]), std::abs(b[i]));
+      if (!(std::abs(a[i] - b[i]) <= 0.05 * scale)) return false;
+    }
+    return true;
+  }
+  void solved(const Slot* slot) {
+    for (const Slot*& r : recent) {
+      if (r == slot) r = nullptr;  // overwritten: its old key is gone
+    }
+    recent[next_recent] = slot;
+    next_recent = (next_recent + 1) % kRecent;
+  }
 
   static std::size_t slotOf(const FullCarEquilibriumKey& key) {
     std::uint64_t h = 1469598103934665603ull;  // FNV-1a over whole words, then mixed
@@ -486,14 +526,19 @@ FullCarEquilibrium FullCarModel::equilibrium(const Eigen::Ref<const Eigen::Vecto
   const FullCarEquilibriumKey key = fullCarEquilibriumKey(FullCarColumn(params.data()));
   EquilibriumMemo::Slot& slot = memo->slots[EquilibriumMemo::slotOf(key)];
   if (!slot.used || std::memcmp(slot.key.data(), key.data(), sizeof(double) * key.size()) != 0) {
+    std::optional<FullCarEquilibrium> start;
+    if (const EquilibriumMemo::Slot* n = memo->near(key)) start = n->equilibrium;
     slot.used = true;
     slot.key = key;
     slot.error.clear();
     try {
-      slot.equilibrium = solveFullCarEquilibrium(FullCarColumn(params.data()));
+      const FullCarColumn column(params.data());
+      slot.equilibrium = start ? solveFullCarEquilibriumFrom(column, *start)
+                               : solveFullCarEquilibrium(column);
     } catch (const std::runtime_error& e) {
       slot.error = e.what();
     }
+    memo->solved(&slot);
   }
   if (!slot.error.empty()) throw std::runtime_error(slot.error);
   return slot.equilibrium;

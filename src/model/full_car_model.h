@@ -164,6 +164,11 @@ struct FullCarEquilibrium {
 // fails to converge.
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarParameters& p);
 FullCarEquilibrium solveFullCarEquilibrium(const FullCarColumn& p);
+// Newton from another point's solution (a filter's steps from one point);
+// the same equilibrium to round-off. When Newton fails from there, the
+// solve from the linear springs decides (and throws as it throws).
+FullCarEquilibrium solveFullCarEquilibriumFrom(const FullCarColumn& p,
+                                               const FullCarEquilibrium& start);
 // The numbers the solve reads (corner positions, springs, unsprung weights,
 // tyre, loads, bars, the elevated moment): columns with equal keys have the
 // same equilibrium bit for bit (a damper or an inertia does not enter).

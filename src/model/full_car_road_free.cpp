@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "pc_ekf/model/input_noise.h"
@@ -111,29 +112,79 @@ Eigen::Vector3d bodyAcceleration(const FullCarRoadFreeConstants& c,
 // angle_before: the gyros' integrals since rest (roll; REP 103 pitch, nose
 // down > 0) at t and at the sample before; gyro_before: the gyros' readings
 // there (x, y).
+// The body's accelerations at one instant, with what outputs() reads of
+// them; kept by the input slopes (OutputParts).
+struct InstantPart {
+  bool valid = false;
+  double key[kMaxInputs + 2];  // the inputs read, then the roll and pitch
+  Eigen::Vector3d a;
+  double specific = 0.0, a_x = 0.0, a_y = 0.0;
+  bool same(const double* in, int count, double roll, double pitch) const {
+    const double angles[2] = {roll, pitch};
+    return valid && std::memcmp(key, in, sizeof(double) * count) == 0 &&
+           std::memcmp(key + count, angles, sizeof angles) == 0;
+  }
+  void keep(const double* in, int count, double roll, double pitch) {
+    std::copy(in, in + count, key);
+    key[count] = roll;
+    key[count + 1] = pitch;
+    valid = true;
+  }
+};
+// The input slopes move one input's noise at a time, at this sample or at
+// the one before: the other instant's part is the same bits as before and is
+// taken from here (one point, one sample: the caller's scope).
+struct OutputParts {
+  int count = 0;  // the inputs read (at most kMaxInputs)
+  InstantPart now, before;
+};
+
 void outputs(const FullCarRoadFreeConstants& c, const FullCarRoadFreeConstants::Point& p,
              const double* now, const double* before, bool before_at_rest, double dt,
              double roll, double pitch, double roll_before, double pitch_before,
-             const double* gyro_before, double* out) {
+             const double* gyro_before, double* out, OutputParts* parts = nullptr) {
   const double r = p.roll_static + roll, pt = p.pitch_static + pitch;
   const Attitude angle{-pt, r};
   double a_x = 0.0, a_y = 0.0, specific = 0.0, unused = 0.0;
-  if (c.elevated) horizontal(c, p, now, angle.theta, &a_x, &a_y);
-  Eigen::Vector3d a = bodyAcceleration(c, p, now, angle, a_x, a_y, &specific);
-  if (c.accel_x >= 0) {
-    // accel_x = a_x + (g + z'') theta - z_I theta'' - imu_x theta'^2: once
-    // more with this solution's z'' and theta'' (theta' the gyro's).
-    const double pitch_rate = c.gyro_y < 0 ? 0.0 : now[c.gyro_y];
-    a_x += -a[0] * angle.theta + p.imu_height * a[1] + p.imu_x * pitch_rate * pitch_rate;
+  Eigen::Vector3d a;
+  if (parts && parts->now.same(now, parts->count, roll, pitch)) {
+    a = parts->now.a;
+    specific = parts->now.specific;
+    a_x = parts->now.a_x;
+    a_y = parts->now.a_y;
+  } else {
+    if (c.elevated) horizontal(c, p, now, angle.theta, &a_x, &a_y);
     a = bodyAcceleration(c, p, now, angle, a_x, a_y, &specific);
+    if (c.accel_x >= 0) {
+      // accel_x = a_x + (g + z'') theta - z_I theta'' - imu_x theta'^2: once
+      // more with this solution's z'' and theta'' (theta' the gyro's).
+      const double pitch_rate = c.gyro_y < 0 ? 0.0 : now[c.gyro_y];
+      a_x += -a[0] * angle.theta + p.imu_height * a[1] + p.imu_x * pitch_rate * pitch_rate;
+      a = bodyAcceleration(c, p, now, angle, a_x, a_y, &specific);
+    }
+    if (parts) {
+      parts->now.keep(now, parts->count, roll, pitch);
+      parts->now.a = a;
+      parts->now.specific = specific;
+      parts->now.a_x = a_x;
+      parts->now.a_y = a_y;
+    }
   }
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
   if (!before_at_rest) {
-    const Attitude angle_before{-(p.pitch_static + pitch_before), p.roll_static + roll_before};
-    double bx = 0.0, by = 0.0;
-    // The sample before's a_x: accel_x's then (to first order).
-    if (c.elevated) horizontal(c, p, before, angle_before.theta, &bx, &by);
-    b = bodyAcceleration(c, p, before, angle_before, bx, by, &unused);
+    if (parts && parts->before.same(before, parts->count, roll_before, pitch_before)) {
+      b = parts->before.a;
+    } else {
+      const Attitude angle_before{-(p.pitch_static + pitch_before), p.roll_static + roll_before};
+      double bx = 0.0, by = 0.0;
+      // The sample before's a_x: accel_x's then (to first order).
+      if (c.elevated) horizontal(c, p, before, angle_before.theta, &bx, &by);
+      b = bodyAcceleration(c, p, before, angle_before, bx, by, &unused);
+      if (parts) {
+        parts->before.keep(before, parts->count, roll_before, pitch_before);
+        parts->before.a = b;
+      }
+    }
   }
   out[2] = (before_at_rest ? 0.0 : gyro_before[0]) + 0.5 * (a[2] + b[2]) * dt;
   out[3] = (before_at_rest ? 0.0 : gyro_before[1]) - 0.5 * (a[1] + b[1]) * dt;
@@ -375,13 +426,16 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
                                                                                Eigen::MatrixXd* slopes) {
     const auto& p = c->points.front();
     Eigen::MatrixXd four;
+    OutputParts parts;
+    parts.count = std::min(inputs->count(), kMaxInputs);
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 4,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* angle,
             double* out) {
           const double gyro_before[2] = {gyros ? before[gx] : 0.0, gyros ? before[gy] : 0.0};
           const double roll = gyros ? angle[0] : 0.0, pitch = gyros ? -angle[1] : 0.0;
-          outputs(*c, p, now, before, at_rest, dt, roll, pitch, roll, pitch, gyro_before, out);
+          outputs(*c, p, now, before, at_rest, dt, roll, pitch, roll, pitch, gyro_before, out,
+                  &parts);
         },
         slopes ? &four : nullptr);
     Eigen::MatrixXd covariance =

@@ -26,7 +26,7 @@ class Checkpoints : public SampleSink {
  public:
   explicit Checkpoints(double every) : every_(every) {}
   void begin(const SampleColumns&) override {}
-  void add(const SampleRecord& r) override {
+  void add(SampleRecord r) override {
     if (r.time >= next_ - 1e-9) {
       kept.push_back(previous_);
       next_ += every_;

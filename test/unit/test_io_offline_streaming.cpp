@@ -54,7 +54,7 @@ struct Collected : SampleSink {
     columns = c;
     if (also) also->begin(c);
   }
-  void add(const SampleRecord& r) override {
+  void add(SampleRecord r) override {
     added_before_begin = added_before_begin || begun == 0;
     records.push_back(r);
     if (also) also->add(r);
