@@ -6,6 +6,7 @@
 #include <limits>
 #include <stdexcept>
 
+#include "pc_ekf/filter/small_product.h"
 #include "pc_ekf/pc/pc_statistics.h"
 
 namespace pc_ekf {
@@ -372,8 +373,13 @@ void linearUpdate(const Eigen::VectorXd& values, const Eigen::VectorXd& z0,
                   const Eigen::MatrixXd& j, const Eigen::VectorXd& r, const Eigen::VectorXd& at,
                   Eigen::VectorXd& mean, Eigen::MatrixXd& cov, UpdateDiagnostics* d) {
   const Eigen::VectorXd innovation = values - z0 - j * (mean - at);
-  const Eigen::MatrixXd pj = cov * j.transpose();
-  Eigen::MatrixXd s = j * pj;
+  // The products by smallProduct (a state of some forty against a few
+  // channels: Eigen's blocked GEMM spent more on packing than on arithmetic).
+  const Eigen::Index n = cov.rows(), c = j.rows();
+  Eigen::MatrixXd pj(n, c);  // P J^T
+  smallProduct(cov.data(), j.data(), c, 1, pj.data(), n, n, c);
+  Eigen::MatrixXd s(c, c);  // J P J^T + R
+  smallProduct(j.data(), pj.data(), 1, n, s.data(), c, n, c);
   s.diagonal() += r;
   const Eigen::LLT<Eigen::MatrixXd> llt(s);
   if (llt.info() != Eigen::Success) {
@@ -391,7 +397,9 @@ void linearUpdate(const Eigen::VectorXd& values, const Eigen::VectorXd& z0,
   d->nis = white.squaredNorm();
   d->channels = static_cast<int>(values.size());
   mean.noalias() += w * white;
-  cov.selfadjointView<Eigen::Lower>().rankUpdate(w, -1.0);
+  Eigen::MatrixXd ww(n, n);  // W W^T
+  smallProduct(w.data(), w.data(), n, 1, ww.data(), n, c, n);
+  cov -= ww;  // (the lower triangle counts: copied to the upper)
   cov.triangularView<Eigen::StrictlyUpper>() = cov.transpose();
   d->finite = mean.allFinite() && cov.allFinite() && std::isfinite(d->nis);
 }

@@ -1,6 +1,7 @@
 #include "pc_ekf/io/samples_csv.h"
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <utility>
 
@@ -32,7 +33,12 @@ char* writeSampleRow(char* o, const SampleRecord& s, std::size_t loo_channels, i
     o = writeG17(o, s.stddev[i]);
     for (int j = 0; j < terms; ++j) {
       *o++ = ',';
-      o = writeG17(o, s.coefficients(i, j));
+      const double c = s.coefficients(i, j);
+      if (c == 0.0 && !std::signbit(c)) {
+        *o++ = '0';  // most coefficients of an affine expansion
+      } else {
+        o = writeG17(o, c);
+      }
     }
   }
   *o++ = ',';
@@ -116,14 +122,18 @@ void SamplesCsv::write(const Block& block) {
   }
   // The first record's coefficient count names the columns of every row.
   if (!header_) writeHeader(static_cast<int>(block.front().coefficients.cols()));
-  std::size_t bound = 0;
-  for (const SampleRecord& r : block) bound += rowBound(r, columns_.loo_channels.size(), terms_);
-  if (buffer_.size() < bound) buffer_.resize(bound);
-  char* o = buffer_.data();
+  // Room for each row's bound before it is written (the rows' text is a
+  // few times shorter: the buffer grows to about a block's text).
+  std::size_t used = 0;
   for (const SampleRecord& r : block) {
-    o = writeSampleRow(o, r, columns_.loo_channels.size(), terms_, columns_.load_transfer_ratio);
+    const std::size_t bound = rowBound(r, columns_.loo_channels.size(), terms_);
+    if (buffer_.size() < used + bound) buffer_.resize(std::max(used + bound, 2 * buffer_.size()));
+    char* const start = buffer_.data() + used;
+    used += static_cast<std::size_t>(
+        writeSampleRow(start, r, columns_.loo_channels.size(), terms_, columns_.load_transfer_ratio) -
+        start);
   }
-  out_.write(buffer_.data(), static_cast<std::streamsize>(o - buffer_.data()));
+  out_.write(buffer_.data(), static_cast<std::streamsize>(used));
   if (!out_) {
     {
       std::lock_guard<std::mutex> lock(mutex_);

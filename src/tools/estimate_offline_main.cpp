@@ -11,6 +11,7 @@
 #include "pc_ekf/io/measurement_csv.h"
 #include "pc_ekf/io/offline_estimation.h"
 #include "pc_ekf/tools/command_line.h"
+#include "pc_ekf/tools/heap_settings.h"
 #include "pc_ekf/tools/record_input.h"
 
 namespace {
@@ -30,6 +31,7 @@ const char* kUsage =
 
 int main(int argc, char** argv) {
   using namespace pc_ekf;
+  keepFreedHeap();
   CommandLine args("estimate_offline", kUsage);
   const int parsed = args.parse(
       argc, argv, {"--config", "--measurements", "--bag", "--method", "--update", "--seed", "--out"},
