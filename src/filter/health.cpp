@@ -76,12 +76,16 @@ std::shared_ptr<const HealthMonitor::SupportDraws> supportDraws(const Polynomial
     if (k == key) return v;
   }
   auto d = std::make_shared<HealthMonitor::SupportDraws>();
-  const Eigen::MatrixXd psi = basis.evaluate(sampleGerms(basis, draws, seed));
-  const Eigen::Index rows = psi.rows(), terms = psi.cols();
+  // The basis at the draws and at kPad points more (each row is its point's
+  // alone), those rows then zeroed: the padded matrix without a copy of it.
+  const Eigen::MatrixXd germs = sampleGerms(basis, draws, seed);
+  const Eigen::Index rows = germs.rows(), terms = static_cast<Eigen::Index>(basis.size());
+  Eigen::MatrixXd points = Eigen::MatrixXd::Zero(rows + HealthMonitor::SupportDraws::kPad, germs.cols());
+  points.topRows(rows) = germs;
   d->draws = rows;
-  d->psi_t = psi.transpose();
-  d->padded = Eigen::MatrixXd::Zero(rows + HealthMonitor::SupportDraws::kPad, terms);
-  d->padded.topRows(rows) = psi;
+  d->padded = basis.evaluate(points);
+  d->padded.bottomRows(HealthMonitor::SupportDraws::kPad).setZero();
+  const auto psi = d->padded.topRows(rows);
   d->max_abs = rows > 0 ? Eigen::VectorXd(psi.cwiseAbs().colwise().maxCoeff().transpose())
                         : Eigen::VectorXd::Zero(terms);
   const auto& indices = basis.multiIndices();
@@ -215,10 +219,11 @@ double HealthMonitor::massOutside(const Eigen::MatrixXd& coeffs, Eigen::Index i,
   // Many candidates (a parameter spread over many germs): left to fullProducts.
   if (static_cast<Eigen::Index>(candidates_.size()) * 8 > draws) return -1.0;
   row_ = coeffs.row(i);
+  const Eigen::MatrixXd& padded = draws_->padded;  // one draw's values a column apart
   const int block_cols = gemvBlockColumns(draws, terms);
   Eigen::Index outside = 0;
   for (Eigen::Index d : candidates_) {
-    const double v = gemvValue(draws_->psi_t.col(d).data(), 1, row_.data(), terms, block_cols);
+    const double v = gemvValue(padded.data() + d, padded.rows(), row_.data(), terms, block_cols);
     outside += (v < lower) || (v > upper);
   }
   return static_cast<double>(outside) / static_cast<double>(draws);

@@ -84,7 +84,6 @@ class HealthMonitor {
     static constexpr int kPad = 16;  // zero rows past the draws (gemvOrderValues reads ahead)
     Eigen::Index draws = 0;
     Eigen::MatrixXd padded;          // (draws + kPad) x S: psi_j at the draws, then zeros
-    Eigen::MatrixXd psi_t;           // S x draws: one draw's values contiguous
     Eigen::VectorXd max_abs;         // per term, max over the draws of |psi_j|
     std::vector<Eigen::Index> first_degree;  // the terms of total degree 1
     Eigen::MatrixXd first;                   // draws x |first_degree|: their columns, together

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <stdexcept>
 
@@ -93,13 +94,55 @@ double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Poi
 // The three outputs (accel_y, accel_z, gyro_x) of one point at t, from the
 // inputs now and at the previous sample (t - dt), the roll since rest and the
 // gyro read at the previous sample.
+// One instant's roll acceleration and specific force, kept by the input
+// slopes (OutputParts).
+struct InstantPart {
+  bool valid = false;
+  double key[kMaxInputs + 1];  // the inputs read, then the roll
+  double phi_dd = 0.0, specific = 0.0;
+  bool same(const double* in, int count, double roll) const {
+    return valid && std::memcmp(key, in, sizeof(double) * count) == 0 &&
+           std::memcmp(key + count, &roll, sizeof roll) == 0;
+  }
+  void keep(const double* in, int count, double roll, double phi_dd_now, double specific_now) {
+    std::copy(in, in + count, key);
+    key[count] = roll;
+    phi_dd = phi_dd_now;
+    specific = specific_now;
+    valid = true;
+  }
+};
+// The input slopes move one input's noise at a time, at this sample or at
+// the one before: the other instant's part is the same bits as before and is
+// taken from here (one point, one sample: the caller's scope).
+struct OutputParts {
+  int count = 0;  // the inputs read (at most kMaxInputs)
+  InstantPart now, before;
+};
+
+// phi'' at one instant, from `parts` when it holds that instant's inputs.
+double instantRoll(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, const double* in,
+                   double roll, double* specific, InstantPart* part, int count) {
+  if (part && part->same(in, count, roll)) {
+    *specific = part->specific;
+    return part->phi_dd;
+  }
+  const double phi_dd = rollAcceleration(c, p, in, roll, specific);
+  if (part) part->keep(in, count, roll, phi_dd, *specific);
+  return phi_dd;
+}
+
 void outputs(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, const double* now,
              const double* before, bool before_at_rest, double dt, double roll,
-             double roll_before, double gyro_before, double* out) {
+             double roll_before, double gyro_before, double* out, OutputParts* parts = nullptr) {
   double specific = 0.0, specific_before = 0.0;
-  const double phi_dd = rollAcceleration(c, p, now, roll, &specific);
+  const int count = parts ? parts->count : 0;
+  const double phi_dd =
+      instantRoll(c, p, now, roll, &specific, parts ? &parts->now : nullptr, count);
   const double phi_dd_before =
-      before_at_rest ? 0.0 : rollAcceleration(c, p, before, roll_before, &specific_before);
+      before_at_rest ? 0.0
+                     : instantRoll(c, p, before, roll_before, &specific_before,
+                                   parts ? &parts->before : nullptr, count);
   const double phi = p.roll_static + roll;
   out[2] = gyro_before + 0.5 * (phi_dd + phi_dd_before) * dt;
   if (c.elevated) {
@@ -381,13 +424,15 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
   return [c, integrated, absolute, relative, gyro, inputs = inputs_](std::size_t k, Eigen::MatrixXd* slopes) {
     const RoadFreeConstants::Point& p = c->points.front();
     Eigen::MatrixXd three;
+    OutputParts parts;
+    parts.count = std::min(inputs->count(), kMaxInputs);
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 3,
         [&](const double* now, const double* before, bool at_rest, double dt, const double* roll,
             double* out) {
           const double gyro_before = gyro >= 0 ? before[gyro] : 0.0;
           outputs(*c, p, now, before, at_rest, dt, integrated.empty() ? 0.0 : roll[0], 0.0,
-                  gyro_before, out);
+                  gyro_before, out, &parts);
         },
         slopes ? &three : nullptr);
     Eigen::MatrixXd covariance =
