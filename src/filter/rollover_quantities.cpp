@@ -9,6 +9,7 @@
 #include <tuple>
 #include <utility>
 
+#include "pc_ekf/pc/background_thread.h"
 #include "pc_ekf/pc/basis_key.h"
 #include "pc_ekf/pc/sparse_grid.h"
 
@@ -131,6 +132,7 @@ std::shared_future<std::shared_ptr<const Rule>> ruleOf(const PolynomialBasis& ba
   }
   std::shared_future<std::shared_ptr<const Rule>> made =
       std::async(std::launch::async, [basis] {
+        markBackgroundThread();
         auto r = std::make_shared<Rule>();
         projectionRule(basis, &r->nodes, &r->weights);
         return std::shared_ptr<const Rule>(std::move(r));

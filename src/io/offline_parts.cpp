@@ -2,6 +2,7 @@
 
 #include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/io/estimation_setup.h"
+#include "pc_ekf/pc/background_thread.h"
 #include "pc_ekf/pc/in_parts.h"
 
 namespace pc_ekf {
@@ -19,6 +20,7 @@ void summarise(const EstimatorConfig& c, const Eigen::VectorXd& mean, const Eige
 
 PdfSamplerFuture startPdfSampler(const EstimatorConfig& c, PolynomialBasis basis) {
   return std::async(std::launch::async, [&c, basis = std::move(basis)] {
+    markBackgroundThread();
     return makePdfSampler(c, basis, static_cast<int>(c.uncertain.size()), machineThreads());
   });
 }

@@ -1,5 +1,6 @@
 #include "pc_ekf/io/road_free_record_stream.h"
 
+#include <algorithm>
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
@@ -134,10 +135,14 @@ class ReadAhead {
   }
 
  private:
-  static constexpr std::size_t kBlock = 4096, kBlocks = 4;
+  // Blocks grow from kFirstBlock to kBlock: the check starts on the first
+  // rows while the rest are parsed (a short record was one block, read whole
+  // before the check began).
+  static constexpr std::size_t kFirstBlock = 256, kBlock = 4096, kBlocks = 4;
   struct Stopped {};
   void read(const EstimatorConfig& c, RecordStream& record) {
     std::vector<Measurement> block;
+    std::size_t size = kFirstBlock;
     const auto hand = [&] {
       std::unique_lock<std::mutex> lock(mutex_);
       changed_.wait(lock, [this] { return blocks_.size() < kBlocks || stop_; });
@@ -151,7 +156,10 @@ class ReadAhead {
     try {
       streamed = readSelected(c, record, [&](const Measurement& m) {
         block.push_back(m);
-        if (block.size() == kBlock) hand();
+        if (block.size() == size) {
+          hand();
+          size = std::min(2 * size, kBlock);
+        }
       });
       if (!block.empty()) hand();
     } catch (const Stopped&) {
