@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <tuple>
 #include <utility>
+#include <vector>
 
 #include "pc_ekf/pc/background_thread.h"
 #include "pc_ekf/pc/basis_key.h"
@@ -149,7 +150,7 @@ void prepareRolloverRule(const ParameterMapping& mapping, const PolynomialBasis&
 }
 
 DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const PolynomialBasis& basis,
-                                     const Eigen::MatrixXd& parameter_coefficients) {
+                                     const Eigen::MatrixXd& parameter_coefficients, int threads) {
   DerivedExpansions out;
   if (!hasRolloverQuantities(mapping) || parameter_coefficients.size() == 0 ||
       !parameter_coefficients.allFinite() || parameter_coefficients.cols() != basis.size() ||
@@ -167,15 +168,31 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
   // (its basis values stay small and in cache).
   constexpr Eigen::Index kBlock = 64;
   const Eigen::Index q_all = rule->nodes.rows();
-  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(3, basis.size());
-  for (Eigen::Index q0 = 0; q0 < q_all; q0 += kBlock) {
-    const Eigen::Index count = std::min(kBlock, q_all - q0);
-    const Eigen::MatrixXd psi = basis.evaluate(rule->nodes.middleRows(q0, count));  // count x S
-    const Eigen::MatrixXd theta = c * psi(Eigen::all, used).transpose();
-    const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
-    if (!values.allFinite()) return out;
-    sum.noalias() += values * rule->weights.segment(q0, count).asDiagonal() * psi;
+  const Eigen::Index blocks = (q_all + kBlock - 1) / kBlock;
+  std::vector<Eigen::MatrixXd> part(static_cast<std::size_t>(blocks));  // 3 x S each
+  const auto project = [&](Eigen::Index b0, Eigen::Index b1) {
+    for (Eigen::Index b = b0; b < b1; ++b) {
+      const Eigen::Index q0 = b * kBlock, count = std::min(kBlock, q_all - q0);
+      const Eigen::MatrixXd psi = basis.evaluate(rule->nodes.middleRows(q0, count));  // count x S
+      const Eigen::MatrixXd theta = c * psi(Eigen::all, used).transpose();
+      const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
+      if (!values.allFinite()) return false;
+      part[static_cast<std::size_t>(b)].noalias() =
+          values * rule->weights.segment(q0, count).asDiagonal() * psi;
+    }
+    return true;
+  };
+  bool finite = true;
+  if (threads > 1 && blocks >= 4) {
+    std::future<bool> later = std::async(std::launch::async, project, blocks / 2, blocks);
+    finite = project(0, blocks / 2);
+    finite = later.get() && finite;
+  } else {
+    finite = project(0, blocks);
   }
+  if (!finite) return out;
+  Eigen::MatrixXd sum = Eigen::MatrixXd::Zero(3, basis.size());
+  for (const Eigen::MatrixXd& p : part) sum += p;
   out.names = rolloverQuantityNames();
   out.coefficients = std::move(sum);
   return out;

@@ -58,7 +58,10 @@ void prepareRolloverRule(const ParameterMapping& mapping, const PolynomialBasis&
 // `parameter_coefficients` (mapping.count() x basis.size()): the quantities
 // at the parameters' values at projectionRule's nodes, projected. Empty when
 // !hasRolloverQuantities, the coefficients are empty or not finite.
+// threads > 1: the rule's blocks of nodes split between two threads (the
+// blocks' sums still added in order: the same numbers).
 DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const PolynomialBasis& basis,
-                                     const Eigen::MatrixXd& parameter_coefficients);
+                                     const Eigen::MatrixXd& parameter_coefficients,
+                                     int threads = 1);
 
 }  // namespace pc_ekf

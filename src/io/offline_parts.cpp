@@ -35,7 +35,7 @@ void summariseDerived(const EstimatorConfig& c, const ParameterMapping& mapping,
                       const PolynomialBasis& basis, const Eigen::MatrixXd& coeffs,
                       const PdfSamplerFuture& sampler, OfflineResult* r) {
   r->derived.clear();
-  const DerivedExpansions d = rolloverExpansions(mapping, basis, coeffs);
+  const DerivedExpansions d = rolloverExpansions(mapping, basis, coeffs, machineThreads());
   if (d.empty()) return;  // no heights: the JSON and pdfs.csv as without them
   const Eigen::VectorXd mean = pcMean(d.coefficients), sd = pcStddev(d.coefficients);
   // The parameters' draws when they share them (pdf.shared_draws), else the
