@@ -547,11 +547,16 @@ Eigen::MatrixXd MovingHorizon::coefficients() const {
   Eigen::MatrixXd c = Eigen::MatrixXd::Zero(n, propagator_.basis().size());
   c.col(0) = theta(mean_.head(n));
   Eigen::LDLT<Eigen::MatrixXd> ldlt(cov_.topLeftCorner(n, n));
-  // A square root L L^T = cov (LDLT with pivoting tolerates a singular cov).
-  Eigen::MatrixXd l = ldlt.transpositionsP().transpose() * Eigen::MatrixXd(ldlt.matrixL()) *
-                      ldlt.vectorD().cwiseMax(0.0).cwiseSqrt().asDiagonal();
-  const Eigen::MatrixXd scaled = prior_std_.asDiagonal() * l;
-  for (int j = 0; j < n; ++j) c.col(degree_one_[static_cast<std::size_t>(j)]) = scaled.col(j);
+  // A square root L L^T = cov (LDLT with pivoting tolerates a singular cov):
+  // column j of P^T L sqrt(D), scaled by the prior std, into the term of
+  // germ j (the products in Eigen's order, without the temporaries).
+  Eigen::MatrixXd pl = Eigen::MatrixXd(ldlt.matrixL());
+  pl = ldlt.transpositionsP().transpose() * pl;
+  const Eigen::VectorXd root = ldlt.vectorD().cwiseMax(0.0).cwiseSqrt();
+  for (int j = 0; j < n; ++j) {
+    double* out = c.col(degree_one_[static_cast<std::size_t>(j)]).data();
+    for (int i = 0; i < n; ++i) out[i] = prior_std_[i] * (pl(i, j) * root[j]);
+  }
   return c;
 }
 
