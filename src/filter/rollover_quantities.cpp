@@ -1,6 +1,7 @@
 #include "pc_ekf/filter/rollover_quantities.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <future>
 #include <memory>
@@ -120,6 +121,18 @@ namespace {
 struct Rule {
   Eigen::MatrixXd nodes;  // Q x dimension
   Eigen::VectorXd weights;
+  // The basis at every node (Q x S), made at the rule's second use: a node
+  // publishes the expansions with every estimate, and evaluating the basis
+  // at the nodes was most of each one's time; a single use (estimate_offline's
+  // summary) evaluates a block at a time and holds none of it.
+  mutable std::atomic<int> uses{0};
+  mutable std::once_flag basis_once;
+  mutable Eigen::MatrixXd basis_at_nodes;
+  const Eigen::MatrixXd* basisAtNodes(const PolynomialBasis& basis) const {
+    if (uses.fetch_add(1) < 1) return nullptr;
+    std::call_once(basis_once, [&] { basis_at_nodes = basis.evaluate(nodes); });
+    return &basis_at_nodes;
+  }
 };
 // One rule per basis content for the process, made once (in the background
 // when prepareRolloverRule came first) and shared by every thread.
@@ -170,10 +183,13 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
   const Eigen::Index q_all = rule->nodes.rows();
   const Eigen::Index blocks = (q_all + kBlock - 1) / kBlock;
   std::vector<Eigen::MatrixXd> part(static_cast<std::size_t>(blocks));  // 3 x S each
+  const Eigen::MatrixXd* at_nodes = rule->basisAtNodes(basis);
   const auto project = [&](Eigen::Index b0, Eigen::Index b1) {
     for (Eigen::Index b = b0; b < b1; ++b) {
       const Eigen::Index q0 = b * kBlock, count = std::min(kBlock, q_all - q0);
-      const Eigen::MatrixXd psi = basis.evaluate(rule->nodes.middleRows(q0, count));  // count x S
+      // count x S: each row its node's alone, so the kept rows are the same numbers.
+      const Eigen::MatrixXd psi = at_nodes ? Eigen::MatrixXd(at_nodes->middleRows(q0, count))
+                                           : basis.evaluate(rule->nodes.middleRows(q0, count));
       const Eigen::MatrixXd theta = c * psi(Eigen::all, used).transpose();
       const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
       if (!values.allFinite()) return false;
