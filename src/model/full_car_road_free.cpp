@@ -3,10 +3,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <stdexcept>
 
 #include "pc_ekf/model/input_noise.h"
+#include "pc_ekf/model/instant_part.h"
 #include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
@@ -113,45 +113,27 @@ Eigen::Vector3d bodyAcceleration(const FullCarRoadFreeConstants& c,
 // down > 0) at t and at the sample before; gyro_before: the gyros' readings
 // there (x, y).
 // The body's accelerations at one instant, with what outputs() reads of
-// them; kept by the input slopes (OutputParts).
-struct InstantPart {
-  bool valid = false;
-  double key[kMaxInputs + 2];  // the inputs read, then the roll and pitch
-  Eigen::Vector3d a;
+// them; kept by the input slopes (instant_part.h). The instant before keeps a.
+struct BodyPart {
+  Eigen::Vector3d a = Eigen::Vector3d::Zero();
   double specific = 0.0, a_x = 0.0, a_y = 0.0;
-  bool same(const double* in, int count, double roll, double pitch) const {
-    const double angles[2] = {roll, pitch};
-    return valid && std::memcmp(key, in, sizeof(double) * count) == 0 &&
-           std::memcmp(key + count, angles, sizeof angles) == 0;
-  }
-  void keep(const double* in, int count, double roll, double pitch) {
-    std::copy(in, in + count, key);
-    key[count] = roll;
-    key[count + 1] = pitch;
-    valid = true;
-  }
 };
-// The input slopes move one input's noise at a time, at this sample or at
-// the one before: the other instant's part is the same bits as before and is
-// taken from here (one point, one sample: the caller's scope).
-struct OutputParts {
-  int count = 0;  // the inputs read (at most kMaxInputs)
-  InstantPart now, before;
-};
+using BodyParts = OutputParts<kMaxInputs, 2, BodyPart>;
 
 void outputs(const FullCarRoadFreeConstants& c, const FullCarRoadFreeConstants::Point& p,
              const double* now, const double* before, bool before_at_rest, double dt,
              double roll, double pitch, double roll_before, double pitch_before,
-             const double* gyro_before, double* out, OutputParts* parts = nullptr) {
+             const double* gyro_before, double* out, BodyParts* parts = nullptr) {
   const double r = p.roll_static + roll, pt = p.pitch_static + pitch;
   const Attitude angle{-pt, r};
   double a_x = 0.0, a_y = 0.0, specific = 0.0, unused = 0.0;
   Eigen::Vector3d a;
-  if (parts && parts->now.same(now, parts->count, roll, pitch)) {
-    a = parts->now.a;
-    specific = parts->now.specific;
-    a_x = parts->now.a_x;
-    a_y = parts->now.a_y;
+  const double angles_now[2] = {roll, pitch};
+  if (parts && parts->now.same(now, parts->count, angles_now)) {
+    a = parts->now.part.a;
+    specific = parts->now.part.specific;
+    a_x = parts->now.part.a_x;
+    a_y = parts->now.part.a_y;
   } else {
     if (c.elevated) horizontal(c, p, now, angle.theta, &a_x, &a_y);
     a = bodyAcceleration(c, p, now, angle, a_x, a_y, &specific);
@@ -162,28 +144,20 @@ void outputs(const FullCarRoadFreeConstants& c, const FullCarRoadFreeConstants::
       a_x += -a[0] * angle.theta + p.imu_height * a[1] + p.imu_x * pitch_rate * pitch_rate;
       a = bodyAcceleration(c, p, now, angle, a_x, a_y, &specific);
     }
-    if (parts) {
-      parts->now.keep(now, parts->count, roll, pitch);
-      parts->now.a = a;
-      parts->now.specific = specific;
-      parts->now.a_x = a_x;
-      parts->now.a_y = a_y;
-    }
+    if (parts) parts->now.keep(now, parts->count, angles_now, BodyPart{a, specific, a_x, a_y});
   }
   Eigen::Vector3d b = Eigen::Vector3d::Zero();
   if (!before_at_rest) {
-    if (parts && parts->before.same(before, parts->count, roll_before, pitch_before)) {
-      b = parts->before.a;
+    const double angles_before[2] = {roll_before, pitch_before};
+    if (parts && parts->before.same(before, parts->count, angles_before)) {
+      b = parts->before.part.a;
     } else {
       const Attitude angle_before{-(p.pitch_static + pitch_before), p.roll_static + roll_before};
       double bx = 0.0, by = 0.0;
       // The sample before's a_x: accel_x's then (to first order).
       if (c.elevated) horizontal(c, p, before, angle_before.theta, &bx, &by);
       b = bodyAcceleration(c, p, before, angle_before, bx, by, &unused);
-      if (parts) {
-        parts->before.keep(before, parts->count, roll_before, pitch_before);
-        parts->before.a = b;
-      }
+      if (parts) parts->before.keep(before, parts->count, angles_before, BodyPart{b, 0.0, 0.0, 0.0});
     }
   }
   out[2] = (before_at_rest ? 0.0 : gyro_before[0]) + 0.5 * (a[2] + b[2]) * dt;
@@ -426,7 +400,7 @@ MechanicalModel::SampleInputNoise FullCarRoadFreeModel::inputNoiseBySample(const
                                                                                Eigen::MatrixXd* slopes) {
     const auto& p = c->points.front();
     Eigen::MatrixXd four;
-    OutputParts parts;
+    BodyParts parts;
     parts.count = std::min(inputs->count(), kMaxInputs);
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 4,

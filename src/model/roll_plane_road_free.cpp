@@ -3,11 +3,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <stdexcept>
 
 #include "pc_ekf/model/input_noise.h"
+#include "pc_ekf/model/instant_part.h"
 #include "pc_ekf/model/smooth_functions.h"
 
 namespace pc_ekf {
@@ -95,46 +95,29 @@ double rollAcceleration(const RoadFreeConstants& c, const RoadFreeConstants::Poi
 // inputs now and at the previous sample (t - dt), the roll since rest and the
 // gyro read at the previous sample.
 // One instant's roll acceleration and specific force, kept by the input
-// slopes (OutputParts).
-struct InstantPart {
-  bool valid = false;
-  double key[kMaxInputs + 1];  // the inputs read, then the roll
+// slopes (instant_part.h).
+struct RollPart {
   double phi_dd = 0.0, specific = 0.0;
-  bool same(const double* in, int count, double roll) const {
-    return valid && std::memcmp(key, in, sizeof(double) * count) == 0 &&
-           std::memcmp(key + count, &roll, sizeof roll) == 0;
-  }
-  void keep(const double* in, int count, double roll, double phi_dd_now, double specific_now) {
-    std::copy(in, in + count, key);
-    key[count] = roll;
-    phi_dd = phi_dd_now;
-    specific = specific_now;
-    valid = true;
-  }
 };
-// The input slopes move one input's noise at a time, at this sample or at
-// the one before: the other instant's part is the same bits as before and is
-// taken from here (one point, one sample: the caller's scope).
-struct OutputParts {
-  int count = 0;  // the inputs read (at most kMaxInputs)
-  InstantPart now, before;
-};
+using RollParts = OutputParts<kMaxInputs, 1, RollPart>;
+using RollInstant = InstantPart<kMaxInputs, 1, RollPart>;
 
 // phi'' at one instant, from `parts` when it holds that instant's inputs.
 double instantRoll(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, const double* in,
-                   double roll, double* specific, InstantPart* part, int count) {
-  if (part && part->same(in, count, roll)) {
-    *specific = part->specific;
-    return part->phi_dd;
+                   double roll, double* specific, RollInstant* part, int count) {
+  const double angles[1] = {roll};
+  if (part && part->same(in, count, angles)) {
+    *specific = part->part.specific;
+    return part->part.phi_dd;
   }
   const double phi_dd = rollAcceleration(c, p, in, roll, specific);
-  if (part) part->keep(in, count, roll, phi_dd, *specific);
+  if (part) part->keep(in, count, angles, RollPart{phi_dd, *specific});
   return phi_dd;
 }
 
 void outputs(const RoadFreeConstants& c, const RoadFreeConstants::Point& p, const double* now,
              const double* before, bool before_at_rest, double dt, double roll,
-             double roll_before, double gyro_before, double* out, OutputParts* parts = nullptr) {
+             double roll_before, double gyro_before, double* out, RollParts* parts = nullptr) {
   double specific = 0.0, specific_before = 0.0;
   const int count = parts ? parts->count : 0;
   const double phi_dd =
@@ -424,7 +407,7 @@ MechanicalModel::SampleInputNoise RollPlaneRoadFreeModel::inputNoiseBySample(con
   return [c, integrated, absolute, relative, gyro, inputs = inputs_](std::size_t k, Eigen::MatrixXd* slopes) {
     const RoadFreeConstants::Point& p = c->points.front();
     Eigen::MatrixXd three;
-    OutputParts parts;
+    RollParts parts;
     parts.count = std::min(inputs->count(), kMaxInputs);
     const Eigen::MatrixXd v = inputOutputCovarianceAt(
         *inputs, k, absolute, relative, integrated, 3,
