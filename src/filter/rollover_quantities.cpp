@@ -27,6 +27,13 @@ struct RolloverRows {
       added_mass_height = -1, wheel_radius = -1, track = -1, gravity = -1;
   std::vector<int> unsprung;  // every unsprung_mass_*
   double wheels_per_unsprung = 1.0;  // the full car's are per axle's wheel
+  // The full vector's rows rolloverValues reads.
+  std::vector<int> read() const {
+    std::vector<int> r{bar_mass, added_mass,  mount_height, body_cg_height, added_mass_height,
+                       wheel_radius, track, gravity};
+    r.insert(r.end(), unsprung.begin(), unsprung.end());
+    return r;
+  }
   bool complete() const {
     return std::min({bar_mass, added_mass, mount_height, body_cg_height, added_mass_height,
                      wheel_radius, track, gravity}) >= 0 &&
@@ -176,7 +183,20 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
   for (Eigen::Index j = 0; j < parameter_coefficients.cols(); ++j) {
     if ((parameter_coefficients.col(j).array() != 0.0).any()) used.push_back(j);
   }
-  const Eigen::MatrixXd c = parameter_coefficients(Eigen::all, used);
+  // Only the parameters the quantities read are evaluated at the nodes (the
+  // rest stay 0: rolloverValues does not read them): most of the work.
+  std::vector<Eigen::Index> read;
+  const std::vector<int> rows = rowsOf(mapping).read();
+  const std::vector<std::string>& model_names = mapping.modelParameterNames();
+  const std::vector<std::string> names = mapping.names();
+  for (Eigen::Index i = 0; i < mapping.count(); ++i) {
+    for (int row : rows) {
+      if (model_names[static_cast<std::size_t>(row)] == names[static_cast<std::size_t>(i)]) {
+        read.push_back(i);
+      }
+    }
+  }
+  const Eigen::MatrixXd c = parameter_coefficients(read, used);
   // c_j = sum_q w_q f(theta(xi_q)) psi_j(xi_q), a block of nodes at a time
   // (its basis values stay small and in cache).
   constexpr Eigen::Index kBlock = 64;
@@ -190,7 +210,8 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
       // count x S: each row its node's alone, so the kept rows are the same numbers.
       const Eigen::MatrixXd psi = at_nodes ? Eigen::MatrixXd(at_nodes->middleRows(q0, count))
                                            : basis.evaluate(rule->nodes.middleRows(q0, count));
-      const Eigen::MatrixXd theta = c * psi(Eigen::all, used).transpose();
+      Eigen::MatrixXd theta = Eigen::MatrixXd::Zero(mapping.count(), count);
+      theta(read, Eigen::all) = c * psi(Eigen::all, used).transpose();
       const Eigen::MatrixXd values = rolloverValues(mapping, mapping.fullParameters(theta));
       if (!values.allFinite()) return false;
       part[static_cast<std::size_t>(b)].noalias() =

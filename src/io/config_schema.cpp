@@ -192,6 +192,7 @@ const std::vector<ConfigKey>& configSchema() {
       {"node.time_jump_tolerance", "number", "0.5", "[0, 1e+06]", "s; a smaller step back is out of order (dropped)"},
       {"node.publish_pdf", "bool", "true", "true or false", "publish `parameter_pdf`"},
       {"node.pdf_every", "integer", "1", "[1, 1000000000]", "publish `parameter_pdf` every k-th sample"},
+      {"node.derived_every", "integer", "10", "[1, 1000000000]", "derived quantities (cg_height, static_stability_factor, rollover_threshold) projected every k-th sample, and at every `parameter_pdf`, load change and re-linearisation; an estimate between carries the latest (`derived_sample_index`); 1: every estimate its own (a projection costs milliseconds over many germs)"},
       {"node.road_wait_timeout", "number", "0.5", "[0, 3600]", "s (wall clock): a sample waits for road data covering its stamp while road messages keep arriving; after this long without any it goes on with the road held at its last value"},
       {"node.max_pending_samples", "integer", "1000", "[1, 100000000]", "samples waiting for road data (the oldest is forced beyond), also for `imu/data`"},
       {"node.imu_max_gap", "number", "0.1", "[1e-06, 3600]", "s: two `imu/data` messages further apart do not bracket a sample (it goes on without IMU channels); the bag reader applies it too"},

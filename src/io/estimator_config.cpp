@@ -476,6 +476,7 @@ void readNode(YamlMapReader r, NodeConfig& n, const ModelType& type) {
   r.number("time_jump_tolerance", n.time_jump_tolerance, 0.0, 1e6);
   n.publish_pdf = readFlag(r, "publish_pdf", n.publish_pdf);
   r.integer("pdf_every", n.pdf_every, 1, 1000000000);
+  r.integer("derived_every", n.derived_every, 1, 1000000000);
   r.number("road_wait_timeout", n.road_wait_timeout, 0.0, 3600.0);
   r.integer("max_pending_samples", n.max_pending_samples, 1, 100000000);
   r.number("imu_max_gap", n.imu_max_gap, 1e-6, 3600.0);

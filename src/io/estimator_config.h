@@ -160,6 +160,10 @@ struct NodeConfig {
   double time_jump_tolerance = 0.5;              // s: a step back beyond this is a time jump
   bool publish_pdf = true;
   int pdf_every = 1;               // publish parameter_pdf every k-th sample
+  // The derived quantities (rollover outputs) projected every k-th sample
+  // (and at a PDF, load change or re-linearisation); the estimates between
+  // carry the latest.
+  int derived_every = 10;
   double road_wait_timeout = 0.5;  // s (wall clock) without road data before a sample goes on
   int max_pending_samples = 1000;  // samples waiting for road data (or for the IMU)
   // imu/data (docs/nodes.md "Clocks"): two IMU messages further apart than

@@ -71,12 +71,25 @@ double EstimatorRun::oldestTime() const {
   return config_.node.coherence_check ? std::min(full, decimated_.roadNeededFrom()) : full;
 }
 
-ParameterEstimate EstimatorRun::message(const StepResult& r, const ros::Time& stamp) const {
+ParameterEstimate EstimatorRun::message(const StepResult& r, const ros::Time& stamp,
+                                        bool latest_derived) const {
   EstimateContext context;
   context.stamp = stamp;
   context.method = "one_step";
   context.update_rule = toString(config_.update);
+  if (latest_derived && derived_index_ >= 0) {
+    context.derived = &derived_;
+    context.derived_index = derived_index_;
+  }
   return estimateMessage(r, *propagator_, full_.settings().health, context);
+}
+
+void EstimatorRun::project(const StepResult& r, bool pdf_due) {
+  const bool due = derived_index_ < 0 || r.index % config_.node.derived_every == 0 || pdf_due ||
+                   r.load_reset || r.relinearized;
+  if (!due || !r.coefficients.allFinite()) return;
+  derived_ = rolloverExpansions(propagator_->mapping(), propagator_->basis(), r.coefficients);
+  derived_index_ = r.index;
 }
 
 SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stamp) {
@@ -109,6 +122,9 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
     }
   }
 
+  const bool pdf_due =
+      pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite();
+  if (!out.non_finite) project(r, pdf_due);
   out.estimate = message(r, stamp);
   // The tyres' load transfer at this sample, at the posterior mean (models that give it).
   const MechanicalModel& model = propagator_->model();
@@ -145,7 +161,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
     out.batch_full = true;
   }
 
-  if (pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite()) {
+  if (pdf_due) {
     out.pdf = PdfRequest{r.coefficients, static_cast<std::uint32_t>(r.index), stamp, {}, {}};
     if (!out.estimate.derived_names.empty()) {  // the rollover outputs' PDFs after them
       out.pdf->derived_names = out.estimate.derived_names;
@@ -224,7 +240,7 @@ ParameterEstimate EstimatorRun::priorEstimate(const ros::Time& stamp) const {
   r.mean = pcMean(r.coefficients);
   r.stddev = pcStddev(r.coefficients);
   r.health.mass_outside_support = Eigen::VectorXd::Zero(r.mean.size());
-  return message(r, stamp);
+  return message(r, stamp, false);
 }
 
 BatchEstimate EstimatorRun::batch(bool road_complete) const {

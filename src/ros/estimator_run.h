@@ -14,6 +14,7 @@
 
 #include "pc_ekf/filter/kept_samples.h"
 #include "pc_ekf/filter/one_step_filter.h"
+#include "pc_ekf/filter/rollover_quantities.h"
 #include "pc_ekf/io/checkpoint.h"
 #include "pc_ekf/io/estimator_config.h"
 #include "pc_ekf/pc/pdf_sampler.h"
@@ -79,7 +80,15 @@ class EstimatorRun {
   void resumeFrom(const Checkpoint& c, const std::string& path);
 
  private:
-  ParameterEstimate message(const StepResult& r, const ros::Time& stamp) const;
+  // latest_derived: the derived quantities of the latest projection (project),
+  // else projected from r.
+  ParameterEstimate message(const StepResult& r, const ros::Time& stamp,
+                            bool latest_derived = true) const;
+  // The derived quantities (rollover outputs) of r projected again when due:
+  // every node.derived_every samples, at a PDF, a load change or a
+  // re-linearisation, and while none is made (a projection over the sparse
+  // grid costs milliseconds, the filter's update less than one).
+  void project(const StepResult& r, bool pdf_due);
 
   EstimatorConfig config_;
   std::shared_ptr<const PcPropagator> propagator_;
@@ -88,6 +97,8 @@ class EstimatorRun {
   OneStepFilter full_;
   OneStepFilter decimated_;
   std::optional<Eigen::VectorXd> disagreement_;  // last multi-rate comparison
+  DerivedExpansions derived_;  // the latest projection, made at sample derived_index_
+  int derived_index_ = -1;     // -1: none yet
   KeptSamples batch_series_;
   ros::Time batch_last_stamp_;
   int pending_swap_ = 0;

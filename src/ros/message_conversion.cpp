@@ -311,6 +311,7 @@ void setDerived(ParameterEstimate& msg, const DerivedExpansions& d) {
 void setRolloverOutputs(ParameterEstimate& msg, const ParameterMapping& mapping,
                         const PolynomialBasis& basis, const Eigen::MatrixXd& coefficients) {
   setDerived(msg, rolloverExpansions(mapping, basis, coefficients));
+  msg.derived_sample_index = msg.derived_names.empty() ? 0 : msg.sample_index;
 }
 
 void setRates(ParameterEstimate& msg, const SafeguardRates& r, double window) {
@@ -413,7 +414,14 @@ ParameterEstimate estimateMessage(const StepResult& result, const PolynomialBasi
                                 std::to_string(basis.size()));
   }
   setCoefficients(msg, result.coefficients);
-  setRolloverOutputs(msg, mapping, basis, result.coefficients);
+  if (context.derived != nullptr) {
+    setDerived(msg, *context.derived);
+    if (!context.derived->empty()) {
+      msg.derived_sample_index = static_cast<std::uint32_t>(std::max(0, context.derived_index));
+    }
+  } else {
+    setRolloverOutputs(msg, mapping, basis, result.coefficients);
+  }
   setHealth(msg, result.health, result.update.channels, health_settings);
   msg.gated = result.gated;
   msg.rejected_samples = static_cast<std::uint32_t>(std::max(0, result.rejected));

@@ -180,6 +180,10 @@ struct EstimateContext {
   std::string frame_id;  // usually empty
   std::string method = "one_step";
   std::string update_rule;  // "paper" | "square_root" | ""
+  // The derived quantities to publish, projected at sample `derived_index`
+  // (the node's cadence, node.derived_every); null: projected from this result.
+  const DerivedExpansions* derived = nullptr;
+  int derived_index = 0;
 };
 
 // Batch results: the posterior-predictive check; outside -> not healthy, `warning` added.
@@ -199,7 +203,8 @@ void setCoefficients(ParameterEstimate& msg, const Eigen::MatrixXd& coefficients
 // means, stds and row-major coefficients; an empty `d` clears them.
 void setDerived(ParameterEstimate& msg, const DerivedExpansions& d);
 // The rollover outputs of `coefficients` (parameters x S) when the vehicle
-// has heights (none otherwise).
+// has heights (none otherwise), derived_sample_index the message's
+// sample_index (set it first).
 void setRolloverOutputs(ParameterEstimate& msg, const ParameterMapping& mapping,
                         const PolynomialBasis& basis, const Eigen::MatrixXd& coefficients);
 // The safeguards' rates (docs/method.md §5.9; empty arrays when not available).

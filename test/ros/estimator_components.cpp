@@ -1,6 +1,7 @@
 // EstimatorTimeline (time origin, ordering, pending samples, road bound),
-// the rosparam conversion of ros_config and EstimatorRun's handling of a
-// non-finite update, without a running estimator.
+// the rosparam conversion of ros_config, EstimatorRun's handling of a
+// non-finite update and its derived quantities' cadence, without a running
+// estimator.
 #include <limits>
 
 #include "estimator_test_support.h"
@@ -213,6 +214,55 @@ TEST(EstimatorRun, NonFiniteUpdateIsReportedNotPublishedAsNan) {
                 1e-12 * std::abs(reference.estimate.mean[i]));
   }
   EXPECT_FALSE(run.batch(false).ok);  // road history gone: refused
+}
+
+// The derived quantities' cadence: projected at the first sample, every
+// node.derived_every-th and at every PDF; the estimates between carry the
+// latest projection, with the sample it was made at.
+TEST(EstimatorRun, DerivedQuantitiesAreProjectedAtTheirCadence) {
+  EstimatorConfig config = loadConfigFile(configPath("turns.yaml"));
+  config.node.coherence_check = false;
+  config.node.derived_every = 4;
+  config.node.pdf_every = 7;
+  const auto propagator = makePropagator(config, makeModel(config, makeRoad(config)));
+  const Record record = syntheticRecord(config, 3);
+  EstimatorRun run(config, propagator, true);
+  std::vector<std::uint32_t> projected_at;
+  std::vector<double> projected;  // the latest projection's cg_height coefficients
+  for (int k = 0; k < 9; ++k) {
+    const SampleEstimate e = run.process(record.samples[k], ros::Time(1 + k, 0));
+    ASSERT_EQ(e.estimate.sample_index, static_cast<std::uint32_t>(k + 1));
+    ASSERT_EQ(e.estimate.derived_names.size(), 3u);
+    projected_at.push_back(e.estimate.derived_sample_index);
+    if (e.estimate.derived_sample_index == e.estimate.sample_index) {
+      // This estimate's own expansions, as a single projection gives them.
+      Eigen::MatrixXd c(propagator->parameterCount(), e.estimate.term_count);
+      for (Eigen::Index i = 0; i < c.rows(); ++i) {
+        for (Eigen::Index j = 0; j < c.cols(); ++j) {
+          c(i, j) = e.estimate.coefficients[i * c.cols() + j];
+        }
+      }
+      const DerivedExpansions d =
+          rolloverExpansions(propagator->mapping(), propagator->basis(), c);
+      for (Eigen::Index j = 0; j < c.cols(); ++j) {
+        EXPECT_EQ(e.estimate.derived_coefficients[j], d.coefficients(0, j)) << "term " << j;
+      }
+    }
+    const std::vector<double> cg(e.estimate.derived_coefficients.begin(),
+                                 e.estimate.derived_coefficients.begin() + e.estimate.term_count);
+    if (e.estimate.derived_sample_index != e.estimate.sample_index) {
+      EXPECT_EQ(cg, projected) << "sample " << k + 1 << " carries the latest projection";
+    }
+    projected = cg;
+    if (e.pdf) {  // a PDF's derived quantities are its own sample's
+      EXPECT_EQ(e.estimate.derived_sample_index, e.estimate.sample_index);
+      EXPECT_EQ(e.pdf->derived.row(0).transpose(),
+                Eigen::Map<const Eigen::VectorXd>(cg.data(), static_cast<Eigen::Index>(cg.size())));
+    }
+  }
+  // First sample, every 4th, and the PDF at 7.
+  EXPECT_EQ(projected_at, (std::vector<std::uint32_t>{1, 1, 1, 4, 4, 4, 7, 8, 8}));
+  EXPECT_EQ(run.priorEstimate(ros::Time(20, 0)).derived_sample_index, 0u);
 }
 
 }  // namespace
