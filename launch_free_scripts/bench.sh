@@ -31,7 +31,7 @@ done
 [[ "$runs" =~ ^[1-9][0-9]*$ ]] || { echo "bench.sh: --runs needs a positive number" >&2; exit 2; }
 export PC_EKF_BENCH_RUNS=$runs
 mkdir -p "$out" && out=$(cd "$out" && pwd)
-rm -rf "$out/raw" "$out/node" "$out/node_n11" "$out/node_road_free" "$out/node_live" "$out/long"
+rm -rf "$out/raw" "$out/node" "$out/node_n11" "$out/node_road_free" "$out/node_full_car_imu" "$out/node_live" "$out/long"
 mkdir -p "$out/raw" "$out/node"
 started=$(date +%s)
 
@@ -106,6 +106,7 @@ node_runs() {
 node_runs "$out/node" paper "the node end to end"
 node_runs "$out/node_n11" n11 "the n = 11 node at 1 kHz in real time"
 node_runs "$out/node_road_free" road_free "the road-free node (vehicle_imu.yaml) at 1 kHz"
+node_runs "$out/node_full_car_imu" full_car_imu "the road-free full car node (full_car_imu.yaml) at 1 kHz"
 # issue 31: the shipped live config at 1 kHz, as a user runs it.
 node_runs "$out/node_live" live "the live node (vehicle_live.yaml as shipped) at 1 kHz"
 # issue 44: long drives. One run (4 minutes at -r 5; PC_EKF_BENCH_LONG_RATE).

@@ -16,6 +16,8 @@
 #     estimation as shipped (config/vehicle_imu.yaml: 10 s at 200 Hz on ISO
 #     class B, joint_states and imu/data, no road), played by
 #     `rosbag play -r 5` (1 kHz, no handshake); node_max_lag_ms as above.
+#   bench_node.sh BIN_DIR OUT_DIR full_car_imu -> OUT_DIR/node.json: the same
+#     with config/full_car_imu.yaml as shipped (four corners, imu/data, odom).
 #   bench_node.sh BIN_DIR OUT_DIR live -> OUT_DIR/node.json: the node with
 #     config/vehicle_live.yaml as shipped (road from road/profile, its PDFs,
 #     re-linearisation and threads) on a bag of the paper bump synthesised at
@@ -34,7 +36,9 @@ out=$2
 mode=${3:-paper}
 samples=${PC_EKF_BENCH_NODE_SAMPLES:-10000}
 duration=$(awk -v n="$samples" 'BEGIN { printf "%g", n / 1000 }')  # 1 kHz
-[ "$mode" = road_free ] && samples=2000  # vehicle_imu.yaml's drive: 10 s at 200 Hz
+# The road-free configs' own drives: 10 s at 200 Hz.
+road_free=0
+case "$mode" in road_free|full_car_imu) road_free=1; samples=2000 ;; esac
 # (live: the 1 kHz bag below; the node's config is vehicle_live.yaml as shipped)
 mkdir -p "$out"
 json="$out/node.json"
@@ -68,9 +72,9 @@ else
 fi
 config="$out/${mode}_1khz.yaml"
 bag_config=$config  # what synthesize_bag simulates (live: the bump, not the topic)
-if [ "$mode" = road_free ]; then
+if [ "$road_free" -eq 1 ]; then
   # As shipped: only the node's joint names are what synthesize_bag writes.
-  cp "$PC_EKF_ROOT/config/vehicle_imu.yaml" "$config"
+  cp "$PC_EKF_ROOT/config/$([ "$mode" = road_free ] && echo vehicle_imu || echo full_car_imu).yaml" "$config"
 elif [ "$mode" = live ]; then
   cp "$PC_EKF_ROOT/config/vehicle_live.yaml" "$config"
   bag_config="$out/live_bag.yaml"
@@ -91,7 +95,7 @@ if [ "$mode" = n11 ]; then
   grep -q "defer: 1.0" "$config" || write_null "cannot set filter.relinearize.defer in the config"
 fi
 grep -qE "^  samples: $samples\b" "$bag_config" || write_null "cannot set sampling.samples in the config"
-if [ "$mode" != road_free ] && [ "$mode" != live ]; then
+if [ "$road_free" -eq 0 ] && [ "$mode" != live ]; then
   grep -qE "^  pdf_every: 100\b" "$config" && grep -qE "^  draws: $draws\b" "$config" ||
     write_null "cannot set node.pdf_every / pdf.draws in the config"
 fi
@@ -105,7 +109,7 @@ pc_ekf_start_owned estimator_node "$out/estimator_node.log" \
 estimator=$PC_EKF_LAST_PID
 rm -f "$out/ready"
 pc_ekf_start_owned counter "$out/counter.log" "$bin/bench_node_throughput" \
-  "_expect:=$samples" _timeout:=30 "_ready:=$out/ready" "_lag_file:=$out/lags.txt" "_rate:=$([ "$mode" = road_free ] && echo 5.0 || echo 1.0)" \
+  "_expect:=$samples" _timeout:=30 "_ready:=$out/ready" "_lag_file:=$out/lags.txt" "_rate:=$([ "$road_free" -eq 1 ] && echo 5.0 || echo 1.0)" \
   __name:=bench_node_throughput
 counter=$PC_EKF_LAST_PID
 for _ in $(seq 600); do
@@ -116,7 +120,7 @@ done
 [ -e "$out/ready" ] || write_null "estimator_node did not come up (see node/estimator_node.log)"
 
 start=$(date +%s.%N)
-if [ "$mode" = road_free ]; then
+if [ "$road_free" -eq 1 ]; then
   pc_ekf_start_owned rosbag_play "$out/replay_node.log" /usr/bin/rosbag play --quiet -r 5 -d 1 "$bag"
 elif [ "$mode" = live ]; then
   pc_ekf_start_owned rosbag_play "$out/replay_node.log" /usr/bin/rosbag play --quiet -d 1 "$bag"
