@@ -124,7 +124,7 @@ SampleEstimate EstimatorRun::process(const Measurement& m, const ros::Time& stam
 
   const bool pdf_due =
       pdfs_ && r.index % config_.node.pdf_every == 0 && r.coefficients.allFinite();
-  if (!out.non_finite) project(r, pdf_due);
+  project(r, pdf_due);  // after a non-finite update: of the state kept
   out.estimate = message(r, stamp);
   // The tyres' load transfer at this sample, at the posterior mean (models that give it).
   const MechanicalModel& model = propagator_->model();
