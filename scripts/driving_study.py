@@ -228,6 +228,7 @@ def main():
                             text = config_text(base, drive, seed, vehicle, load, car)
                             d, p = estimate(exe, tmp, text, method)
                             if a.keep:
+                                os.makedirs(a.keep, exist_ok=True)
                                 tag = "%s_%s_%d_%d_%d" % (re.sub(r"\W+", "_", drive), method, vehicle,
                                                           int(load[0]), seed)
                                 open(os.path.join(a.keep, tag + ".yaml"), "w").write(text)
