@@ -129,9 +129,9 @@ struct Rule {
   Eigen::MatrixXd nodes;  // Q x dimension
   Eigen::VectorXd weights;
   // The basis at every node (Q x S), made at the rule's second use: a node
-  // publishes the expansions with every estimate, and evaluating the basis
-  // at the nodes was most of each one's time; a single use (estimate_offline's
-  // summary) evaluates a block at a time and holds none of it.
+  // projects again every node.derived_every samples, and evaluating the basis
+  // at the nodes was most of each projection's time; a single use
+  // (estimate_offline's summary) evaluates a block at a time and holds none of it.
   mutable std::atomic<int> uses{0};
   mutable std::once_flag basis_once;
   mutable Eigen::MatrixXd basis_at_nodes;
@@ -187,13 +187,12 @@ DerivedExpansions rolloverExpansions(const ParameterMapping& mapping, const Poly
   // rest stay 0: rolloverValues does not read them): most of the work.
   std::vector<Eigen::Index> read;
   const std::vector<int> rows = rowsOf(mapping).read();
-  const std::vector<std::string>& model_names = mapping.modelParameterNames();
-  const std::vector<std::string> names = mapping.names();
   for (Eigen::Index i = 0; i < mapping.count(); ++i) {
-    for (int row : rows) {
-      if (model_names[static_cast<std::size_t>(row)] == names[static_cast<std::size_t>(i)]) {
-        read.push_back(i);
-      }
+    const std::string& name = mapping.uncertain()[static_cast<std::size_t>(i)].name;
+    if (std::any_of(rows.begin(), rows.end(), [&](int row) {
+          return mapping.modelParameterNames()[static_cast<std::size_t>(row)] == name;
+        })) {
+      read.push_back(i);
     }
   }
   const Eigen::MatrixXd c = parameter_coefficients(read, used);
